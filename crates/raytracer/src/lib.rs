@@ -1,0 +1,1 @@
+//! A ray tracer for the course scene language. World convention: **z-up**, right-handed.
