@@ -1,13 +1,235 @@
 //! `rayterra render`: renders a scene file with the ray tracer.
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use raytracer::image_io::{OutputFormat, write_image};
+use raytracer::render::{MAX_SPP, Progress, RenderStats, Stage};
+use raytracer::scene::{self, Diagnostic, SourceFile};
+use raytracer::{PreparedScene, RenderSettings, Sampling, TextureSearch};
+
+/// The project's showcase scene, rendered when no scene file is given.
+const SHOWCASE: &str = include_str!("../../../scenes/showcase.txt");
+/// The name the showcase scene is reported under.
+const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
 
 /// Arguments of `rayterra render`.
 #[derive(Debug, clap::Args)]
-pub struct RenderArgs {}
+#[command(after_help = "Examples:\n  \
+    rayterra render                                   the built-in showcase scene, to render.png\n  \
+    rayterra render scene.txt -o scene.png --size 640x380\n  \
+    rayterra render scene.txt --textures path/to/textures --spp 16\n  \
+    rayterra render --check scene.txt                 validate only, print the warnings")]
+pub struct RenderArgs {
+    /// Scene file in the course scene language; without it, the built-in showcase scene.
+    pub scene: Option<PathBuf>,
+
+    /// Output image; the extension picks the format: .png, .bmp, .exr or .hdr (linear).
+    #[arg(short, long, value_name = "FILE", default_value = "render.png")]
+    pub output: PathBuf,
+
+    /// Image size, overriding the scene's image_W and image_H.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+
+    /// Stratified samples in every pixel, instead of adaptive anti-aliasing (one sample per
+    /// pixel, 16 on edges and contrasts).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub spp: Option<u32>,
+
+    /// Worker threads [default: one per core]. The image does not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+
+    /// A folder to look for textures in, after the scene file's folder and before the working
+    /// directory. May be repeated.
+    #[arg(long, value_name = "DIR")]
+    pub textures: Vec<PathBuf>,
+
+    /// Encode 8-bit output as sRGB instead of the course's linear look.
+    #[arg(long)]
+    pub gamma: bool,
+
+    /// Seed of the random sampling.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
+
+    /// Parse and validate the scene (textures included) and print the warnings; render nothing.
+    #[arg(long)]
+    pub check: bool,
+
+    /// Print nothing but warnings and errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Parses `WxH`, e.g. `1280x760`.
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 1280x760, not `{text}`"))?;
+    let side = |s: &str| -> Result<u32, String> {
+        match s.trim().parse::<u32>() {
+            Ok(v) if v > 0 => Ok(v),
+            _ => Err(format!("`{s}` is not a positive whole number of pixels")),
+        }
+    };
+    Ok((side(w)?, side(h)?))
+}
 
 /// Runs `rayterra render`.
-pub fn run(_args: RenderArgs) -> Result<(), ExitCode> {
-    eprintln!("error: the ray tracer is not built yet");
-    Err(ExitCode::FAILURE)
+pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
+    let started = Instant::now();
+    let source = match &args.scene {
+        Some(path) => SourceFile::read(path).map_err(|e| fail(&e.to_string()))?,
+        None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
+    };
+    let parsed = scene::parse(&source).map_err(|e| {
+        print_diagnostics(&e.diagnostics);
+        let n = e.error_count();
+        fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
+    })?;
+    print_diagnostics(&parsed.diagnostics);
+
+    let search =
+        TextureSearch { scene_dir: source.dir().map(Path::to_path_buf), extra_dirs: args.textures.clone() };
+    let prepared = PreparedScene::new(parsed.scene, &search).map_err(|errors| {
+        print_diagnostics(&errors);
+        fail(&format!("`{}` names textures that cannot be used; nothing was rendered", source.name()))
+    })?;
+    let prepare_time = started.elapsed();
+
+    let mut settings = RenderSettings::for_scene(&prepared);
+    if let Some((w, h)) = args.size {
+        // The parser already warned about the file's own aspect; warn again only if the new size
+        // changes it.
+        let cam = &prepared.scene.camera;
+        let same_aspect = w as u64 * cam.image_height as u64 == h as u64 * cam.image_width as u64;
+        if let Some(message) = scene::aspect_mismatch(cam, w, h).filter(|_| !same_aspect) {
+            eprintln!("warning: with --size {w}x{h}, {message}");
+        }
+        settings.width = w;
+        settings.height = h;
+    }
+    if let Some(n) = args.spp {
+        settings.sampling = Sampling::Uniform(n);
+    }
+    settings.threads = args.threads.map(|n| n as usize);
+    settings.seed = args.seed;
+    scene::check_image_size(settings.width, settings.height).map_err(|m| fail(&m))?;
+    let format = OutputFormat::from_path(&args.output).map_err(|e| fail(&e.to_string()))?;
+    if format.is_linear() && args.gamma {
+        eprintln!("warning: --gamma has no effect on linear {format:?} output");
+    }
+
+    if args.check {
+        if !args.quiet {
+            let scene = &prepared.scene;
+            println!(
+                "{}: ok ({} primitives, {} lights, {}x{} pixels)",
+                source.name(),
+                scene.primitives.len(),
+                scene.lights.len(),
+                settings.width,
+                settings.height
+            );
+        }
+        return Ok(());
+    }
+
+    let bar = progress_bar(args.quiet);
+    let report = |p: Progress| {
+        if bar.length() != Some(p.total) {
+            bar.set_length(p.total);
+            bar.set_message(match p.stage {
+                Stage::Tracing => "tracing rows",
+                Stage::Refining => "refining edges",
+            });
+        }
+        bar.set_position(p.done);
+    };
+    let render_started = Instant::now();
+    let rendered = raytracer::render(&prepared, &settings, &report).map_err(|e| fail(&e.to_string()))?;
+    let render_time = render_started.elapsed();
+    bar.finish_and_clear();
+
+    write_image(&rendered.image, &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
+    if !args.quiet {
+        print_summary(&args.output, &settings, &rendered.stats, prepare_time, render_time);
+    }
+    Ok(())
+}
+
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    // Draws on stderr, and only when it is a terminal.
+    let bar = ProgressBar::new(1);
+    if let Ok(style) =
+        ProgressStyle::with_template("{msg:>14} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
+}
+
+fn print_summary(
+    output: &Path,
+    settings: &RenderSettings,
+    stats: &RenderStats,
+    prepare: Duration,
+    render: Duration,
+) {
+    let seconds = render.as_secs_f64().max(1e-9);
+    let rays_per_second = stats.rays as f64 / seconds;
+    println!("wrote {}", output.display());
+    println!(
+        "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
+        settings.width,
+        settings.height,
+        seconds,
+        prepare.as_secs_f64(),
+        stats.threads,
+        stats.camera_samples,
+        stats.refined_pixels,
+    );
+    println!(
+        "{} rays, {:.1} M rays/s ({:.1} M rays/s per thread)",
+        stats.rays,
+        rays_per_second / 1e6,
+        rays_per_second / 1e6 / stats.threads.max(1) as f64
+    );
+}
+
+fn print_diagnostics(diagnostics: &[Diagnostic]) {
+    for d in diagnostics {
+        eprintln!("{d}");
+    }
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
+/// Prints an error and returns the failure exit code.
+fn fail(message: &str) -> ExitCode {
+    eprintln!("error: {message}");
+    ExitCode::FAILURE
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse() {
+        assert_eq!(parse_size("1280x760"), Ok((1280, 760)));
+        assert_eq!(parse_size("64X32"), Ok((64, 32)));
+        assert!(parse_size("1280").is_err());
+        assert!(parse_size("0x10").is_err());
+        assert!(parse_size("ax10").is_err());
+    }
 }

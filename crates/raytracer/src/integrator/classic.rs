@@ -1,0 +1,383 @@
+//! The classic shading model of the course template (spec section 5), exactly: ambient, diffuse
+//! and the view-independent `(N.L)^20` highlight, hard and soft shadows, mirror and glossy
+//! reflection, refraction with total internal reflection and Beer absorption, every result
+//! clamped to 1 at every depth, and a depth limit of 10.
+//!
+//! It is not physically based (no fall-off, no Fresnel, per-depth clamping): it is what the course's
+//! users expect their scene files to look like.
+
+use std::f64::consts::TAU;
+
+use glam::DVec3;
+
+use crate::geometry::{Ray, offset_origin};
+use crate::light::Light;
+use crate::prepare::{Hit, PreparedScene};
+use crate::sampler::{PixelRng, Siblings, Strata, hash_values, mix64};
+
+/// Exponent of the highlight lobe `(N.L)^SPEC_POWER`.
+pub const SPEC_POWER: i32 = 20;
+/// Deepest ray traced; the primary ray is depth 1, deeper rays return black.
+pub const MAX_DEPTH: u32 = 10;
+/// Glossy reflection is sampled only at depths up to this; deeper it is a perfect mirror.
+pub const MAX_GLOSSY_DEPTH: u32 = 2;
+/// Samples per quality unit: an area light takes `16 * shade_quality` shadow samples and a glossy
+/// reflection `16 * drefl_quality` directions.
+pub const SAMPLES_PER_QUALITY: u32 = 16;
+
+/// Per-path mutable state: the pixel's random numbers, the ray count and the noise estimate.
+pub struct TraceContext<'a> {
+    /// The pixel's generator.
+    pub rng: &'a mut PixelRng,
+    /// Rays traced so far (camera, secondary and shadow rays).
+    pub rays: u64,
+    /// Estimated variance of the colour (per channel, the largest), summed over the sampled
+    /// estimates (area-light shadows, glossy reflections) met along the tagged part of the path:
+    /// the adaptive sampler refines pixels whose estimate is visibly noisy.
+    pub variance: f64,
+}
+
+impl TraceContext<'_> {
+    /// A context for one pixel's samples.
+    pub fn new(rng: &mut PixelRng) -> TraceContext<'_> {
+        TraceContext { rng, rays: 0, variance: 0.0 }
+    }
+}
+
+/// The classic integrator over a prepared scene.
+pub struct Classic<'s> {
+    scene: &'s PreparedScene,
+    shadow_strata: Strata,
+    glossy_strata: Strata,
+}
+
+/// Purpose codes that keep the per-pixel stratum shifts of different estimates independent.
+const GLOSSY_PURPOSE: u64 = u64::MAX;
+
+impl<'s> Classic<'s> {
+    /// The integrator for `scene`, with its camera's quality settings.
+    pub fn new(scene: &'s PreparedScene) -> Classic<'s> {
+        let cam = &scene.scene.camera;
+        Classic {
+            scene,
+            shadow_strata: Strata::for_count(SAMPLES_PER_QUALITY * cam.shade_quality),
+            glossy_strata: Strata::for_count(SAMPLES_PER_QUALITY * cam.drefl_quality),
+        }
+    }
+
+    /// The colour seen along a primary ray, in [0, 1] per channel. `siblings` says how this
+    /// pixel sample shares nested estimates with the pixel's other samples. When `tag` is given,
+    /// it is mixed with the objects and point lights that decide the colour along the
+    /// deterministic part of the path (primitives hit, mirror and refraction chains, lit point
+    /// lights), as the template's anti-aliasing hash did: neighbouring pixels with different tags
+    /// straddle an edge.
+    pub fn radiance(
+        &self,
+        cx: &mut TraceContext<'_>,
+        ray: &Ray,
+        siblings: Siblings,
+        tag: Option<&mut u64>,
+    ) -> DVec3 {
+        self.trace(cx, ray, 1, siblings, tag)
+    }
+
+    fn trace(
+        &self,
+        cx: &mut TraceContext<'_>,
+        ray: &Ray,
+        depth: u32,
+        sib: Siblings,
+        mut tag: Option<&mut u64>,
+    ) -> DVec3 {
+        if depth > MAX_DEPTH {
+            return DVec3::ZERO;
+        }
+        cx.rays += 1;
+        let scene = &self.scene.scene;
+        let (primitive, hit) = match self.scene.closest_hit(ray) {
+            Hit::Miss => return scene.background.miss_color(ray.dir).clamp(DVec3::ZERO, DVec3::ONE),
+            Hit::Emitter { light, .. } => {
+                mix_tag(&mut tag, 1 << 32 | light as u64);
+                return scene.lights[light as usize].color().clamp(DVec3::ZERO, DVec3::ONE);
+            }
+            Hit::Surface { primitive, hit } => (primitive, hit),
+        };
+        mix_tag(&mut tag, primitive as u64);
+        let prim = &scene.primitives[primitive as usize];
+        let material = &prim.material;
+        let point = ray.at(hit.t);
+        let outward = prim.shape.outward_normal(point, hit.part);
+        let front = ray.dir.dot(outward) < 0.0;
+        let normal = if front { outward } else { -outward };
+        let magnitude = self.scene.magnitude(primitive).max(point.abs().max_element());
+        let surface = SurfacePoint { point, normal, magnitude };
+
+        let mut color = DVec3::ZERO;
+        if material.has_local() {
+            let base = self.scene.surface_color(primitive, point, hit.part);
+            color += self.local_light(cx, &surface, base, material.diff, material.spec, depth, sib, &mut tag);
+        }
+        if material.refl > 0.0 {
+            let reflected = ray.dir - 2.0 * ray.dir.dot(normal) * normal;
+            let weight = material.color * material.refl;
+            color += weight
+                * if material.drefl > 0.0 && depth <= MAX_GLOSSY_DEPTH {
+                    self.glossy(
+                        cx,
+                        &surface,
+                        reflected,
+                        material.drefl,
+                        depth,
+                        sib,
+                        weight.max_element(),
+                        tag.is_some(),
+                    )
+                } else {
+                    self.trace(cx, &surface.spawn(reflected), depth + 1, sib, tag.as_deref_mut())
+                };
+        }
+        if material.refr > 0.0 {
+            let n = if front { 1.0 / material.rindex } else { material.rindex };
+            let dir = refract(ray.dir, normal, n);
+            let mut transmitted = self.trace(cx, &surface.spawn(dir), depth + 1, sib, tag);
+            if !front {
+                // The ray travelled `t` inside the object before leaving it here.
+                transmitted *= (-material.absor * hit.t).exp();
+            }
+            color += material.refr * transmitted;
+        }
+        color.clamp(DVec3::ZERO, DVec3::ONE)
+    }
+
+    /// Ambient, diffuse and highlight terms (spec 5.2) with shadows (5.3).
+    #[allow(clippy::too_many_arguments)]
+    fn local_light(
+        &self,
+        cx: &mut TraceContext<'_>,
+        surface: &SurfacePoint,
+        base: DVec3,
+        diff: f64,
+        spec: f64,
+        depth: u32,
+        sib: Siblings,
+        tag: &mut Option<&mut u64>,
+    ) -> DVec3 {
+        let scene = &self.scene.scene;
+        let mut color = base * scene.background.color * diff;
+        for (index, light) in scene.lights.iter().enumerate() {
+            let to_light = (light.centre() - surface.point).normalize_or_zero();
+            let d = to_light.dot(surface.normal);
+            // Lights behind the surface contribute nothing, shadowed or not: skip the shadow rays.
+            if d <= 0.0 {
+                continue;
+            }
+            let (shade, shade_variance) = self.shade(cx, light, index, surface, depth, sib, tag.is_some());
+            if shade <= 0.0 {
+                continue;
+            }
+            if matches!(light, Light::Point { .. }) {
+                mix_tag(tag, 2 << 32 | index as u64);
+            }
+            let full = base * light.color() * (diff * d + spec * d.powi(SPEC_POWER));
+            if tag.is_some() {
+                let scale = full.max_element().min(1.0);
+                cx.variance += scale * scale * shade_variance;
+            }
+            color += full * shade;
+        }
+        color
+    }
+
+    /// The unshadowed fraction of `light` seen from the surface point, in [0, 1] (spec 5.3), and
+    /// the estimated variance of that fraction (when `track_noise`; 0 otherwise).
+    #[allow(clippy::too_many_arguments)]
+    fn shade(
+        &self,
+        cx: &mut TraceContext<'_>,
+        light: &Light,
+        index: usize,
+        surface: &SurfacePoint,
+        depth: u32,
+        sib: Siblings,
+        track_noise: bool,
+    ) -> (f64, f64) {
+        let origin = offset_origin(surface.point, surface.normal, surface.magnitude);
+        let visible = |cx: &mut TraceContext<'_>, target: DVec3| -> bool {
+            cx.rays += 1;
+            let to = target - origin;
+            let dist = to.length();
+            dist.is_nan() || dist <= 0.0 || !self.scene.occluded(&Ray { origin, dir: to / dist }, dist)
+        };
+        let strata = self.shadow_strata;
+        let total = strata.count();
+        let sampled = |cx: &mut TraceContext<'_>, point_at: &dyn Fn(f64, f64) -> DVec3| -> (f64, f64) {
+            let k = sib.share(total);
+            let shift = hash_values(&[cx.rng.key(), depth as u64, index as u64]);
+            let mut unblocked = 0u32;
+            let mut errors = StratumErrors::new(strata, track_noise);
+            for j in 0..k {
+                let s = sib.stratum(j, total, shift);
+                let (a, b) = strata.sample(s, cx.rng);
+                let v = visible(cx, point_at(a, b));
+                unblocked += v as u32;
+                errors.record(s, DVec3::splat(if v { 1.0 } else { 0.0 }));
+            }
+            (unblocked as f64 / k as f64, errors.variance_of_mean(k))
+        };
+        match light {
+            Light::Point { position, .. } => (if visible(cx, *position) { 1.0 } else { 0.0 }, 0.0),
+            // Stratified over the light's area (the spec's jittered 4x4 grid, refined for higher
+            // quality).
+            Light::Square { shape, .. } => sampled(cx, &|a, b| shape.point_at(2.0 * a - 1.0, 2.0 * b - 1.0)),
+            // Stratified uniformly over the sphere's surface (equal-area cells in z and angle).
+            Light::Sphere { shape, .. } => sampled(cx, &|a, b| {
+                let z = 1.0 - 2.0 * a;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = TAU * b;
+                shape.centre + shape.radius * DVec3::new(r * phi.cos(), r * phi.sin(), z)
+            }),
+        }
+    }
+
+    /// Glossy reflection (spec 5.4): the mean of directions `R + drefl (x b1 + y b2)` with
+    /// `(x, y) = rho (cos theta, sin theta)`, `rho = 2^xi - 1`, `theta = 2 pi xi'` (the `exp`
+    /// distribution), traced at depth + 2 without anti-aliasing bookkeeping.
+    ///
+    /// When `track_noise` is set, the variance of the mean, scaled by `weight` (the reflection's
+    /// weight in the colour), is added to the context's estimate.
+    #[allow(clippy::too_many_arguments)]
+    fn glossy(
+        &self,
+        cx: &mut TraceContext<'_>,
+        surface: &SurfacePoint,
+        reflected: DVec3,
+        drefl: f64,
+        depth: u32,
+        sib: Siblings,
+        weight: f64,
+        track_noise: bool,
+    ) -> DVec3 {
+        let r = reflected.normalize();
+        let b1 = r.cross(DVec3::X).try_normalize().unwrap_or_else(|| r.cross(DVec3::Y).normalize());
+        let b2 = r.cross(b1);
+        let strata = self.glossy_strata;
+        let total = strata.count();
+        let k = sib.share(total);
+        let shift = hash_values(&[cx.rng.key(), depth as u64, GLOSSY_PURPOSE]);
+        let mut sum = DVec3::ZERO;
+        let mut errors = StratumErrors::new(strata, track_noise);
+        for j in 0..k {
+            let s = sib.stratum(j, total, shift);
+            let (xi, xi2) = strata.sample(s, cx.rng);
+            let rho = xi.exp2() - 1.0;
+            // Single precision is ample for a perturbation of at most `drefl`, and twice as fast.
+            let (sin, cos) = (std::f32::consts::TAU * xi2 as f32).sin_cos();
+            let dir = r + drefl * rho * (cos as f64 * b1 + sin as f64 * b2);
+            let c = self.trace(cx, &surface.spawn(dir), depth + 2, sib.nested(k, j), None);
+            sum += c;
+            errors.record(s, c);
+        }
+        if track_noise {
+            cx.variance += weight * weight * errors.variance_of_mean(k);
+        }
+        sum / k as f64
+    }
+}
+
+/// The error estimate of a stratified mean, from the samples' second differences along the rows
+/// of the stratum grid: for three neighbouring cells, `(f0 - 2 f1 + f2)^2 / 6` estimates the
+/// variance of one sample about its cell's mean, free of any linear trend across the cells. The
+/// mean of `k` samples then has variance `sigma^2 / k`. Unlike the plain sample variance, the
+/// estimate stays small for a smooth integrand (whose error stratification removes) and grows where
+/// the integrand jumps inside the pattern (a shadow or object edge).
+struct StratumErrors {
+    strata: Strata,
+    /// Sample value of each stratum, when recording.
+    values: Vec<Option<f64>>,
+}
+
+impl StratumErrors {
+    /// Records samples of `strata` when `enabled`; otherwise costs nothing.
+    fn new(strata: Strata, enabled: bool) -> StratumErrors {
+        let len = if enabled { strata.count() as usize } else { 0 };
+        StratumErrors { strata, values: vec![None; len] }
+    }
+
+    /// Records the value (largest channel) of the sample taken in stratum `s`.
+    #[inline]
+    fn record(&mut self, s: u32, value: DVec3) {
+        if let Some(slot) = self.values.get_mut(s as usize) {
+            *slot = Some(value.max_element());
+        }
+    }
+
+    /// The estimated variance of the mean of the `k` samples recorded.
+    fn variance_of_mean(&self, k: u32) -> f64 {
+        let nx = self.strata.nx as usize;
+        let (mut sum, mut triples) = (0.0, 0u32);
+        for row in self.values.chunks(nx) {
+            for w in row.windows(3) {
+                if let [Some(a), Some(b), Some(c)] = *w {
+                    sum += (a - 2.0 * b + c).powi(2) / 6.0;
+                    triples += 1;
+                }
+            }
+        }
+        if triples == 0 { 0.0 } else { sum / triples as f64 / k as f64 }
+    }
+}
+
+/// A shading point: position, normal facing the incoming ray, and the magnitude that scales the
+/// offset of rays leaving it.
+struct SurfacePoint {
+    point: DVec3,
+    normal: DVec3,
+    magnitude: f64,
+}
+
+impl SurfacePoint {
+    /// A ray leaving the point in direction `dir`, started just off the surface on the side
+    /// `dir` goes to, so it cannot hit the surface it leaves.
+    #[inline]
+    fn spawn(&self, dir: DVec3) -> Ray {
+        let side = if dir.dot(self.normal) >= 0.0 { self.normal } else { -self.normal };
+        Ray::new(offset_origin(self.point, side, self.magnitude), dir)
+    }
+}
+
+/// Refracts the unit direction `v` at a surface with unit normal `n` facing it, with relative
+/// index `eta` (incoming over outgoing); reflects instead on total internal reflection.
+#[inline]
+pub fn refract(v: DVec3, n: DVec3, eta: f64) -> DVec3 {
+    let cos_i = -n.dot(v);
+    let cos_t2 = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    if cos_t2 > 0.0 { v * eta + n * (eta * cos_i - cos_t2.sqrt()) } else { v + 2.0 * cos_i * n }
+}
+
+#[inline]
+fn mix_tag(tag: &mut Option<&mut u64>, value: u64) {
+    if let Some(t) = tag {
+        **t = mix64(**t ^ value.wrapping_mul(0x2545_f491_4f6c_dd1d));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn refraction_obeys_snell_and_reflects_past_the_critical_angle() {
+        let n = DVec3::Z;
+        let v = DVec3::new(0.6, 0.0, -0.8);
+        let t = refract(v, n, 1.0 / 1.5);
+        assert!((t.length() - 1.0).abs() < 1e-12);
+        let sin_t = t.x;
+        assert!((sin_t - 0.6 / 1.5).abs() < 1e-12, "sin t = {sin_t}");
+        // From glass to air at 53 degrees: beyond the critical angle (41.8 degrees).
+        let steep = DVec3::new(0.8, 0.0, -0.6);
+        let tir = refract(steep, n, 1.5);
+        assert!((tir - DVec3::new(0.8, 0.0, 0.6)).length() < 1e-12);
+        // Straight through at normal incidence.
+        assert!((refract(-DVec3::Z, n, 1.7) + DVec3::Z).length() < 1e-12);
+    }
+}

@@ -1,0 +1,232 @@
+//! A scene made ready to render: textures loaded or generated, the BVH built, and the ray queries
+//! every integrator uses.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::accel::Bvh;
+use crate::geometry::{Bounds, Ray, Shape, ShapeHit, ShapePart};
+use crate::light::Light;
+use crate::procedural;
+use crate::scene::{Diagnostic, Scene, Severity};
+use crate::texture::{Texture, TextureError, TextureRef, TextureSource};
+
+/// Where `texture=` file paths are looked for, in order: the scene file's folder, the extra
+/// folders (`--textures`), then the working directory. Absolute paths are used as they are.
+#[derive(Clone, Debug, Default)]
+pub struct TextureSearch {
+    /// The scene file's folder, if the scene came from a file.
+    pub scene_dir: Option<PathBuf>,
+    /// Extra folders, searched after the scene's folder.
+    pub extra_dirs: Vec<PathBuf>,
+}
+
+impl TextureSearch {
+    /// The folders searched for a relative path, in order.
+    pub fn folders(&self) -> Vec<PathBuf> {
+        let mut dirs: Vec<PathBuf> = self.scene_dir.iter().cloned().collect();
+        dirs.extend(self.extra_dirs.iter().cloned());
+        dirs.push(PathBuf::from("."));
+        dirs
+    }
+
+    /// Finds the file a `texture=` path names.
+    pub fn resolve(&self, name: &str) -> Result<PathBuf, TextureError> {
+        let path = Path::new(name);
+        if path.is_absolute() {
+            return if path.is_file() {
+                Ok(path.to_path_buf())
+            } else {
+                Err(TextureError::NotFound { name: name.to_owned(), searched: vec![path.to_path_buf()] })
+            };
+        }
+        let searched: Vec<PathBuf> = self.folders().iter().map(|d| d.join(path)).collect();
+        searched
+            .iter()
+            .find(|p| p.is_file())
+            .cloned()
+            .ok_or(TextureError::NotFound { name: name.to_owned(), searched })
+    }
+}
+
+/// What a ray hit first.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Hit {
+    /// Nothing.
+    Miss,
+    /// A primitive.
+    Surface {
+        /// Index into `scene.primitives`.
+        primitive: u32,
+        /// Where on it.
+        hit: ShapeHit,
+    },
+    /// The visible shape of a square or sphere light.
+    Emitter {
+        /// Index into `scene.lights`.
+        light: u32,
+        /// Distance along the ray.
+        t: f64,
+    },
+}
+
+/// A scene ready to render.
+#[derive(Debug)]
+pub struct PreparedScene {
+    /// The scene as parsed.
+    pub scene: Scene,
+    /// Loaded and generated textures.
+    textures: Vec<Texture>,
+    /// For each primitive, the index of its texture.
+    texture_of: Vec<Option<u32>>,
+    /// BVH over the bounded primitives.
+    bvh: Bvh,
+    /// Indices of unbounded primitives (planes), tested one by one.
+    unbounded: Vec<u32>,
+    /// Rounding-error magnitude of each primitive ([`Shape::magnitude`]).
+    magnitudes: Vec<f64>,
+    /// Lights with a visible shape: (light index, shape).
+    emitters: Vec<(u32, Shape)>,
+}
+
+impl PreparedScene {
+    /// Loads the textures the scene names (image files through `search`, built-in ones
+    /// generated) and builds the acceleration structure. Every unreadable texture is reported.
+    pub fn new(scene: Scene, search: &TextureSearch) -> Result<PreparedScene, Vec<Diagnostic>> {
+        // Distinct sources, each loaded once, in parallel.
+        let mut sources: Vec<&TextureRef> = Vec::new();
+        let mut index_of: HashMap<&TextureSource, u32> = HashMap::new();
+        let mut texture_of = Vec::with_capacity(scene.primitives.len());
+        for p in &scene.primitives {
+            texture_of.push(p.material.texture.as_ref().map(|t| {
+                *index_of.entry(&t.source).or_insert_with(|| {
+                    sources.push(t);
+                    sources.len() as u32 - 1
+                })
+            }));
+        }
+        let loaded: Vec<Result<Texture, Diagnostic>> = sources
+            .par_iter()
+            .map(|t| load_texture(&t.source, search).map_err(|e| texture_diagnostic(t, e)))
+            .collect();
+        let mut textures = Vec::with_capacity(loaded.len());
+        let mut errors = Vec::new();
+        for r in loaded {
+            match r {
+                Ok(t) => textures.push(t),
+                Err(d) => errors.push(d),
+            }
+        }
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+
+        let mut bounded: Vec<(u32, Bounds)> = Vec::new();
+        let mut unbounded = Vec::new();
+        for (i, p) in scene.primitives.iter().enumerate() {
+            match p.shape.bounds() {
+                Some(b) => bounded.push((i as u32, b)),
+                None => unbounded.push(i as u32),
+            }
+        }
+        let emitters = scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| match l {
+                Light::Point { .. } => None,
+                Light::Square { shape, .. } => Some((i as u32, Shape::Square(shape.clone()))),
+                Light::Sphere { shape, .. } => Some((i as u32, Shape::Sphere(shape.clone()))),
+            })
+            .collect();
+        let magnitudes = scene.primitives.iter().map(|p| p.shape.magnitude()).collect();
+        Ok(PreparedScene {
+            bvh: Bvh::build(&bounded),
+            unbounded,
+            magnitudes,
+            emitters,
+            textures,
+            texture_of,
+            scene,
+        })
+    }
+
+    /// The nearest primitive or light shape along the ray.
+    #[inline]
+    pub fn closest_hit(&self, ray: &Ray) -> Hit {
+        let mut best = Hit::Miss;
+        let mut t_max = f64::INFINITY;
+        let prims = &self.scene.primitives;
+        self.bvh.closest(ray, 0.0, t_max, |i, limit| {
+            let hit = prims[i as usize].shape.intersect(ray, 0.0, limit)?;
+            best = Hit::Surface { primitive: i, hit };
+            Some(hit.t)
+        });
+        if let Hit::Surface { hit, .. } = best {
+            t_max = hit.t;
+        }
+        for &i in &self.unbounded {
+            if let Some(hit) = prims[i as usize].shape.intersect(ray, 0.0, t_max) {
+                best = Hit::Surface { primitive: i, hit };
+                t_max = hit.t;
+            }
+        }
+        for (light, shape) in &self.emitters {
+            if let Some(hit) = shape.intersect(ray, 0.0, t_max) {
+                best = Hit::Emitter { light: *light, t: hit.t };
+                t_max = hit.t;
+            }
+        }
+        best
+    }
+
+    /// Whether any primitive lies on the ray before distance `t_max` (lights never block).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
+        let prims = &self.scene.primitives;
+        self.unbounded.iter().any(|&i| prims[i as usize].shape.intersect(ray, 0.0, t_max).is_some())
+            || self.bvh.any(ray, 0.0, t_max, |i| prims[i as usize].shape.intersect(ray, 0.0, t_max).is_some())
+    }
+
+    /// The rounding-error magnitude of primitive `i` (see [`crate::geometry::offset_origin`]).
+    #[inline]
+    pub fn magnitude(&self, primitive: u32) -> f64 {
+        self.magnitudes[primitive as usize]
+    }
+
+    /// The surface colour of primitive `i` at `point` on `part`: its `color=` times its texture.
+    #[inline]
+    pub fn surface_color(&self, primitive: u32, point: DVec3, part: ShapePart) -> DVec3 {
+        let p = &self.scene.primitives[primitive as usize];
+        match self.texture_of[primitive as usize] {
+            Some(t) => {
+                let (u, v) = p.shape.texture_coordinates(point, part);
+                p.material.color * self.textures[t as usize].sample(u, v)
+            }
+            None => p.material.color,
+        }
+    }
+}
+
+fn load_texture(source: &TextureSource, search: &TextureSearch) -> Result<Texture, TextureError> {
+    match source {
+        TextureSource::Builtin(b) => Ok(procedural::generate(*b)),
+        TextureSource::File(name) => Texture::load(&search.resolve(name)?),
+    }
+}
+
+fn texture_diagnostic(t: &TextureRef, e: TextureError) -> Diagnostic {
+    let mut d = Diagnostic {
+        severity: Severity::Error,
+        message: e.to_string(),
+        location: Some(t.location.clone()),
+        notes: Vec::new(),
+    };
+    if matches!(e, TextureError::NotFound { .. }) {
+        d.notes.push("pass the folder that holds the course's textures with `--textures DIR`".into());
+    }
+    d
+}

@@ -1,0 +1,312 @@
+//! The render driver: pixels in parallel, adaptive anti-aliasing, progress and statistics.
+//!
+//! Adaptive mode (the default) improves on the template's edge resampling: every pixel first takes
+//! one sample at its centre, recording a tag of what it saw (objects along the mirror and
+//! refraction chain, lit point lights) and an estimate of its own noise (from the spread of its
+//! area-light shadow rays and glossy directions). Then every pixel whose tag differs from a
+//! neighbour's (a geometry or shadow edge), whose colour differs from a neighbour's by more than
+//! [`CONTRAST_THRESHOLD`] (a texture or lighting edge), or whose estimated error exceeds
+//! [`NOISE_THRESHOLD`] (a penumbra or a busy glossy reflection) is re-rendered with a jittered
+//! `REFINE_GRID x REFINE_GRID` grid of samples. (The template used a fixed 3 x 3 grid, on tag edges
+//! only.) Uniform mode takes the same number of stratified samples in every pixel.
+//!
+//! Rows are rendered in parallel, but each pixel's random numbers come from its own coordinates,
+//! so the image is the same bit for bit whatever the number of threads.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::camera::Camera;
+use crate::image_io::Image;
+use crate::integrator::Classic;
+use crate::integrator::classic::TraceContext;
+use crate::prepare::{Hit, PreparedScene};
+use crate::sampler::{PixelRng, Siblings, Strata};
+use crate::scene::check_image_size;
+
+/// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
+pub const REFINE_GRID: u32 = 4;
+/// Largest per-channel colour difference between neighbours that does not trigger refinement.
+pub const CONTRAST_THRESHOLD: f64 = 0.1;
+/// Largest estimated standard error of a pixel's first-pass colour that does not trigger
+/// refinement (one and a half 8-bit steps).
+pub const NOISE_THRESHOLD: f64 = 1.5 / 255.0;
+/// Largest `--spp`.
+pub const MAX_SPP: u32 = 4096;
+
+/// How pixels are sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sampling {
+    /// One sample per pixel, then `REFINE_GRID^2` samples where an edge or a contrast is found.
+    Adaptive,
+    /// This many stratified samples in every pixel (`--spp N`).
+    Uniform(u32),
+}
+
+/// Settings of one render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Pixel sampling.
+    pub sampling: Sampling,
+    /// Worker threads; `None` uses one per core.
+    pub threads: Option<usize>,
+    /// Seed of all random numbers.
+    pub seed: u64,
+}
+
+impl RenderSettings {
+    /// The scene file's image size with adaptive sampling; uniform 16 samples when the camera
+    /// has a lens (defocus blur needs samples everywhere, not only on edges).
+    pub fn for_scene(scene: &PreparedScene) -> RenderSettings {
+        let cam = &scene.scene.camera;
+        RenderSettings {
+            width: cam.image_width,
+            height: cam.image_height,
+            sampling: if cam.aperture > 0.0 { Sampling::Uniform(16) } else { Sampling::Adaptive },
+            threads: None,
+            seed: 0,
+        }
+    }
+}
+
+/// The stage a progress report is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Tracing every pixel.
+    Tracing,
+    /// Re-rendering the pixels on edges (adaptive mode).
+    Refining,
+}
+
+/// A progress report: `done` of `total` units (rows while tracing, pixels while refining).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Progress {
+    /// The stage.
+    pub stage: Stage,
+    /// Units finished.
+    pub done: u64,
+    /// Units in the stage.
+    pub total: u64,
+}
+
+/// Counts of the work a render did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RenderStats {
+    /// Rays traced: camera, reflected, refracted, glossy and shadow rays.
+    pub rays: u64,
+    /// Camera samples taken.
+    pub camera_samples: u64,
+    /// Pixels re-rendered by adaptive anti-aliasing.
+    pub refined_pixels: u64,
+    /// Worker threads used.
+    pub threads: usize,
+}
+
+/// A finished render.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image, linear RGB.
+    pub image: Image,
+    /// What it took.
+    pub stats: RenderStats,
+}
+
+/// Why a render could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// An image size that is empty or too large.
+    #[error("{0}")]
+    ImageSize(String),
+    /// A sample count out of range.
+    #[error("the number of samples per pixel must be from 1 to {MAX_SPP}, not {0}")]
+    SampleCount(u32),
+    /// The worker threads could not be started.
+    #[error("cannot start {threads} worker threads: {source}")]
+    Threads {
+        /// Threads asked for.
+        threads: usize,
+        /// Why not.
+        #[source]
+        source: rayon::ThreadPoolBuildError,
+    },
+}
+
+/// Renders `scene` with the classic model. `progress` is called from worker threads as work
+/// finishes.
+pub fn render(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Rendered, RenderError> {
+    check_image_size(settings.width, settings.height).map_err(RenderError::ImageSize)?;
+    if let Sampling::Uniform(n) = settings.sampling
+        && !(1..=MAX_SPP).contains(&n)
+    {
+        return Err(RenderError::SampleCount(n));
+    }
+    let threads = settings.threads.unwrap_or(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|source| RenderError::Threads { threads, source })?;
+    Ok(pool.install(|| Renderer::new(scene, settings).run(progress)))
+}
+
+struct Renderer<'s> {
+    integrator: Classic<'s>,
+    camera: Camera,
+    settings: &'s RenderSettings,
+    rays: AtomicU64,
+}
+
+/// Pass numbers, part of each pixel's random seed.
+const FIRST_PASS: u32 = 0;
+const REFINE_PASS: u32 = 1;
+
+impl<'s> Renderer<'s> {
+    fn new(scene: &'s PreparedScene, settings: &'s RenderSettings) -> Renderer<'s> {
+        let (w, h) = (settings.width, settings.height);
+        // Autofocus: the distance to the surface at the image centre.
+        let probe = Camera::new(&scene.scene.camera, w, h, 1.0);
+        let focus = match scene.closest_hit(&probe.central_ray()) {
+            Hit::Surface { hit, .. } => hit.t,
+            Hit::Emitter { t, .. } => t,
+            Hit::Miss => 1.0,
+        };
+        Renderer {
+            integrator: Classic::new(scene),
+            camera: Camera::new(&scene.scene.camera, w, h, focus),
+            settings,
+            rays: AtomicU64::new(0),
+        }
+    }
+
+    fn run(&self, progress: &(dyn Fn(Progress) + Sync)) -> Rendered {
+        let (w, h) = (self.settings.width as usize, self.settings.height as usize);
+        let (first_samples, track_tags) = match self.settings.sampling {
+            Sampling::Adaptive => (1, true),
+            Sampling::Uniform(n) => (n, false),
+        };
+        let mut colors = vec![DVec3::ZERO; w * h];
+        let n_tracked = if track_tags { w * h } else { 0 };
+        let mut tags = vec![PixelTrace::default(); n_tracked];
+        let rows_done = AtomicU64::new(0);
+        let first = Strata::for_count(first_samples);
+        let trace_row = |y: usize, row: &mut [DVec3], mut row_tags: Option<&mut [PixelTrace]>| {
+            for (x, c) in row.iter_mut().enumerate() {
+                let trace = row_tags.as_deref_mut().map(|t| &mut t[x]);
+                *c = self.pixel(x as u32, y as u32, FIRST_PASS, first, trace);
+            }
+            let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(Progress { stage: Stage::Tracing, done, total: h as u64 });
+        };
+        if track_tags {
+            colors
+                .par_chunks_mut(w)
+                .zip(tags.par_chunks_mut(w))
+                .enumerate()
+                .for_each(|(y, (row, row_tags))| trace_row(y, row, Some(row_tags)));
+        } else {
+            colors.par_chunks_mut(w).enumerate().for_each(|(y, row)| trace_row(y, row, None));
+        }
+        let mut camera_samples = (w * h) as u64 * first_samples as u64;
+
+        let mut refined_pixels = 0;
+        if track_tags {
+            let flagged = edge_pixels(&colors, &tags, w, h);
+            refined_pixels = flagged.len() as u64;
+            let grid = Strata { nx: REFINE_GRID, ny: REFINE_GRID };
+            let done = AtomicU64::new(0);
+            let total = flagged.len() as u64;
+            progress(Progress { stage: Stage::Refining, done: 0, total });
+            const CHUNK: usize = 64;
+            let refined: Vec<DVec3> = flagged
+                .par_chunks(CHUNK)
+                .flat_map_iter(|chunk| {
+                    let values: Vec<DVec3> = chunk
+                        .iter()
+                        .map(|&i| self.pixel((i % w) as u32, (i / w) as u32, REFINE_PASS, grid, None))
+                        .collect();
+                    let finished = done.fetch_add(chunk.len() as u64, Ordering::Relaxed) + chunk.len() as u64;
+                    progress(Progress { stage: Stage::Refining, done: finished, total });
+                    values
+                })
+                .collect();
+            for (&i, c) in flagged.iter().zip(refined) {
+                colors[i] = c;
+            }
+            camera_samples += refined_pixels * grid.count() as u64;
+        }
+
+        let pixels = colors.iter().map(|c| c.as_vec3().to_array()).collect();
+        Rendered {
+            image: Image::new(self.settings.width, self.settings.height, pixels),
+            stats: RenderStats {
+                rays: self.rays.load(Ordering::Relaxed),
+                camera_samples,
+                refined_pixels,
+                threads: rayon::current_num_threads(),
+            },
+        }
+    }
+
+    /// The colour of pixel `(x, y)` (0, 0 at the top left) from `strata.count()` camera samples
+    /// (at the centre for a single sample, jittered in each cell otherwise). With `trace`, records
+    /// the pixel's tag and noise estimate.
+    fn pixel(&self, x: u32, y: u32, pass: u32, strata: Strata, mut trace: Option<&mut PixelTrace>) -> DVec3 {
+        let mut rng = PixelRng::new(self.settings.seed, x, y, pass);
+        let n = strata.count();
+        // Nested estimates are shared among ceil(sqrt(n)) groups of samples, so their sample
+        // count grows with the square root of the pixel's.
+        let groups = (n as f64).sqrt().ceil() as u32;
+        let mut sum = DVec3::ZERO;
+        let mut cx = TraceContext::new(&mut rng);
+        for s in 0..n {
+            let (dx, dy) = if n == 1 { (0.5, 0.5) } else { strata.sample(s, cx.rng) };
+            let lens = if self.camera.has_lens() { (cx.rng.uniform(), cx.rng.uniform()) } else { (0.0, 0.0) };
+            let ray = self.camera.ray(x as f64 + dx, y as f64 + dy, lens);
+            let siblings = Siblings { count: groups, index: s % groups };
+            let tag = trace.as_deref_mut().map(|t| &mut t.tag);
+            sum += self.integrator.radiance(&mut cx, &ray, siblings, tag);
+        }
+        if let Some(t) = trace {
+            t.error = (cx.variance / n as f64).sqrt() as f32;
+        }
+        self.rays.fetch_add(cx.rays, Ordering::Relaxed);
+        sum / n as f64
+    }
+}
+
+/// What the first pass records about a pixel for the adaptive sampler.
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelTrace {
+    /// Hash of the objects and lit point lights along the deterministic path.
+    tag: u64,
+    /// Estimated standard error of the pixel's colour.
+    error: f32,
+}
+
+/// Indices of the pixels to refine: an estimated error above [`NOISE_THRESHOLD`], a tag different
+/// from a 4-neighbour's, or a colour differing from a 4-neighbour's by more than
+/// [`CONTRAST_THRESHOLD`] in some channel.
+fn edge_pixels(colors: &[DVec3], traces: &[PixelTrace], w: usize, h: usize) -> Vec<usize> {
+    let differs = |a: usize, b: usize| {
+        traces[a].tag != traces[b].tag || (colors[a] - colors[b]).abs().max_element() > CONTRAST_THRESHOLD
+    };
+    (0..w * h)
+        .filter(|&i| {
+            let (x, y) = (i % w, i / w);
+            traces[i].error as f64 > NOISE_THRESHOLD
+                || (x > 0 && differs(i, i - 1))
+                || (x + 1 < w && differs(i, i + 1))
+                || (y > 0 && differs(i, i - w))
+                || (y + 1 < h && differs(i, i + w))
+        })
+        .collect()
+}

@@ -1,0 +1,184 @@
+//! Deterministic random numbers and stratified sample patterns.
+//!
+//! Every pixel seeds its own generator from its coordinates, the pass and the render seed, so an
+//! image does not depend on how many threads rendered it or in which order.
+
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg32;
+
+/// SplitMix64's finaliser: a fast, well-mixing hash of a 64-bit value.
+#[inline]
+pub fn mix64(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
+/// Hashes a sequence of values into one key.
+#[inline]
+pub fn hash_values(values: &[u64]) -> u64 {
+    values.iter().fold(0x51_7cc1_b727_220a, |h, &v| mix64(h ^ v.wrapping_add(0x9e37_79b9_7f4a_7c15)))
+}
+
+/// The random-number generator of one pixel in one pass.
+#[derive(Clone, Debug)]
+pub struct PixelRng {
+    rng: Pcg32,
+    /// A key identifying the pixel and pass (for per-pixel decisions shared by its samples).
+    key: u64,
+}
+
+impl PixelRng {
+    /// The generator of pixel `(x, y)` in pass `pass` of a render seeded with `seed`.
+    pub fn new(seed: u64, x: u32, y: u32, pass: u32) -> PixelRng {
+        let key = hash_values(&[seed, x as u64, y as u64, pass as u64]);
+        PixelRng { rng: Pcg32::seed_from_u64(key), key }
+    }
+
+    /// A uniform number in [0, 1).
+    #[inline]
+    pub fn uniform(&mut self) -> f64 {
+        self.rng.random::<f64>()
+    }
+
+    /// The pixel's key.
+    #[inline]
+    pub fn key(&self) -> u64 {
+        self.key
+    }
+}
+
+/// A stratified grid of `nx * ny` cells over the unit square; cell `s` is column `s % nx`, row
+/// `s / nx`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Strata {
+    /// Cells across.
+    pub nx: u32,
+    /// Cells down.
+    pub ny: u32,
+}
+
+impl Strata {
+    /// The most nearly square grid of exactly `n` cells (`n >= 1`): `4 x 4` for 16, `4 x 8` for
+    /// 32, `8 x 8` for 64.
+    pub fn for_count(n: u32) -> Strata {
+        let n = n.max(1);
+        let mut nx = (n as f64).sqrt() as u32;
+        while nx > 1 && !n.is_multiple_of(nx) {
+            nx -= 1;
+        }
+        Strata { nx: nx.max(1), ny: n / nx.max(1) }
+    }
+
+    /// Number of cells.
+    #[inline]
+    pub fn count(&self) -> u32 {
+        self.nx * self.ny
+    }
+
+    /// A point jittered uniformly inside cell `s`.
+    #[inline]
+    pub fn sample(&self, s: u32, rng: &mut PixelRng) -> (f64, f64) {
+        let (cx, cy) = (s % self.nx, (s / self.nx) % self.ny);
+        ((cx as f64 + rng.uniform()) / self.nx as f64, (cy as f64 + rng.uniform()) / self.ny as f64)
+    }
+}
+
+/// How the samples of one estimate are shared out among sibling estimates.
+///
+/// A pixel takes `P` primary samples, and each may open nested estimates (a glossy reflection's
+/// directions, an area light's shadow rays) that the spec sizes at `N` samples each. Rather than
+/// spending `N` samples in every sibling, the siblings split the `N` strata between them: sibling
+/// `i` of `m` takes strata `i, i + m, i + 2m, ...` (rotated by a per-pixel shift), `ceil(N / m)` of
+/// them. Each stratum is then sampled as often as before across the pixel, the estimate stays
+/// unbiased (the shift is uniform), and the cost no longer multiplies with depth.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Siblings {
+    /// Number of sibling estimates sharing the strata.
+    pub count: u32,
+    /// This estimate's index among them.
+    pub index: u32,
+}
+
+impl Siblings {
+    /// A lone estimate: takes all strata.
+    pub const ALONE: Siblings = Siblings { count: 1, index: 0 };
+
+    /// Samples this sibling takes of an estimate with `total` strata.
+    #[inline]
+    pub fn share(&self, total: u32) -> u32 {
+        total.div_ceil(self.count).max(1)
+    }
+
+    /// The stratum of this sibling's `j`-th sample among `total`, rotated by `shift`.
+    #[inline]
+    pub fn stratum(&self, j: u32, total: u32, shift: u64) -> u32 {
+        ((self.index as u64 + j as u64 * self.count as u64 + shift) % total as u64) as u32
+    }
+
+    /// The siblings of the `j`-th of `k` nested samples taken by this estimate.
+    #[inline]
+    pub fn nested(&self, k: u32, j: u32) -> Siblings {
+        const MAX_COUNT: u32 = 1 << 20;
+        let count = self.count.saturating_mul(k).min(MAX_COUNT);
+        Siblings { count, index: (self.index.saturating_mul(k).saturating_add(j)) % count }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strata_are_as_square_as_possible() {
+        assert_eq!(Strata::for_count(16), Strata { nx: 4, ny: 4 });
+        assert_eq!(Strata::for_count(32), Strata { nx: 4, ny: 8 });
+        assert_eq!(Strata::for_count(64), Strata { nx: 8, ny: 8 });
+        assert_eq!(Strata::for_count(7), Strata { nx: 1, ny: 7 });
+        assert_eq!(Strata::for_count(0).count(), 1);
+    }
+
+    #[test]
+    fn samples_fall_in_their_cells() {
+        let s = Strata::for_count(16);
+        let mut rng = PixelRng::new(1, 2, 3, 0);
+        for cell in 0..16 {
+            let (x, y) = s.sample(cell, &mut rng);
+            assert_eq!(((x * 4.0) as u32, (y * 4.0) as u32), (cell % 4, cell / 4));
+        }
+    }
+
+    #[test]
+    fn siblings_cover_every_stratum_equally() {
+        for (m, total) in [(1, 16), (4, 16), (16, 16), (5, 16), (32, 16)] {
+            let mut hits = vec![0u32; total as usize];
+            for index in 0..m {
+                let s = Siblings { count: m, index };
+                for j in 0..s.share(total) {
+                    hits[s.stratum(j, total, 7) as usize] += 1;
+                }
+            }
+            let (lo, hi) = (hits.iter().min().copied(), hits.iter().max().copied());
+            assert!(lo >= Some(1) && hi.zip(lo).is_some_and(|(h, l)| h - l <= 1), "{m}/{total}: {hits:?}");
+        }
+    }
+
+    #[test]
+    fn pixel_generators_are_reproducible_and_distinct() {
+        let a: Vec<f64> = (0..4)
+            .map({
+                let mut r = PixelRng::new(9, 10, 11, 0);
+                move |_| r.uniform()
+            })
+            .collect();
+        let b: Vec<f64> = (0..4)
+            .map({
+                let mut r = PixelRng::new(9, 10, 11, 0);
+                move |_| r.uniform()
+            })
+            .collect();
+        let c = PixelRng::new(9, 11, 10, 0).uniform();
+        assert_eq!(a, b);
+        assert_ne!(a[0], c);
+    }
+}

@@ -1,0 +1,155 @@
+//! The scene: plain data parsed from a scene file, and the parser with its diagnostics.
+//!
+//! Conventions: the world is **z-up** and right-handed; colours are linear RGB (material colours in
+//! [0, 1], light colours may exceed 1).
+
+mod diagnostic;
+mod parser;
+mod source;
+
+pub use diagnostic::{Diagnostic, Location, Severity};
+pub use parser::{
+    MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_QUALITY, Parsed, SceneError, aspect_mismatch, check_image_size,
+    parse,
+};
+pub use source::{ReadError, SourceFile, Span};
+
+use glam::DVec3;
+
+use crate::geometry::Shape;
+use crate::light::Light;
+use crate::material::Material;
+
+/// A whole scene as described by a scene file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Ambient colour and the colour of rays that hit nothing.
+    pub background: Background,
+    /// Camera and render-quality settings.
+    pub camera: CameraSettings,
+    /// The lights, in file order.
+    pub lights: Vec<Light>,
+    /// The objects, in file order.
+    pub primitives: Vec<Primitive>,
+}
+
+/// The `background` block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Background {
+    /// `color=`: the ambient colour (spec 5.2) and, without a gradient, the colour of rays that
+    /// hit nothing.
+    pub color: DVec3,
+    /// `top=` / `bottom=`: a vertical gradient for rays that hit nothing.
+    pub gradient: Option<Gradient>,
+}
+
+/// A vertical sky gradient: `t = 0.5 (dir.z + 1)`, colour `bottom (1 - t) + top t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gradient {
+    /// Colour straight down (`bottom=`, white when only `top=` is given).
+    pub bottom: DVec3,
+    /// Colour straight up (`top=`, white when only `bottom=` is given).
+    pub top: DVec3,
+}
+
+impl Background {
+    /// The colour seen along a ray of unit direction `dir` that hits nothing.
+    #[inline]
+    pub fn miss_color(&self, dir: DVec3) -> DVec3 {
+        match self.gradient {
+            Some(g) => {
+                let t = 0.5 * (dir.z + 1.0);
+                g.bottom * (1.0 - t) + g.top * t
+            }
+            None => self.color,
+        }
+    }
+}
+
+impl Default for Background {
+    fn default() -> Background {
+        Background { color: DVec3::ZERO, gradient: None }
+    }
+}
+
+/// The `camera` block: view and quality settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraSettings {
+    /// Eye position (`O=`).
+    pub eye: DVec3,
+    /// Unit view direction (`N=`, normalised).
+    pub dir: DVec3,
+    /// Width of the image plane at distance 1 (`lens_W=`).
+    pub lens_width: f64,
+    /// Height of the image plane at distance 1 (`lens_H=`).
+    pub lens_height: f64,
+    /// Image width in pixels (`image_W=`).
+    pub image_width: u32,
+    /// Image height in pixels (`image_H=`).
+    pub image_height: u32,
+    /// Soft-shadow quality (`shade_quality=`): an area light takes `16 * q` shadow samples.
+    pub shade_quality: u32,
+    /// Glossy quality (`drefl_quality=`): a glossy reflection takes `16 * q` samples.
+    pub drefl_quality: u32,
+    /// Lens radius of the thin-lens camera (`aperture=`); 0 is a pinhole.
+    pub aperture: f64,
+    /// Distance to the plane in focus (`focal_dist=`); `None` focuses on the surface seen at
+    /// the image centre.
+    pub focal_distance: Option<f64>,
+    /// Photon-mapping settings, accepted for a later mode.
+    pub photons: PhotonSettings,
+}
+
+impl Default for CameraSettings {
+    /// The course template's defaults.
+    fn default() -> CameraSettings {
+        CameraSettings {
+            eye: DVec3::ZERO,
+            dir: DVec3::Y,
+            lens_width: 0.88,
+            lens_height: 0.88,
+            image_width: 420,
+            image_height: 420,
+            shade_quality: 4,
+            drefl_quality: 4,
+            aperture: 0.0,
+            focal_distance: None,
+            photons: PhotonSettings::default(),
+        }
+    }
+}
+
+/// Photon-mapping settings of the `camera` block (`max_photons=`, `emit_photons=`,
+/// `sample_photons=`, `sample_dist=`). The classic model does not use them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonSettings {
+    /// Capacity of the photon map.
+    pub max_photons: u64,
+    /// Photons emitted in all.
+    pub emit_photons: u64,
+    /// Photons gathered per estimate.
+    pub sample_photons: u64,
+    /// Largest gathering radius.
+    pub sample_dist: f64,
+}
+
+impl Default for PhotonSettings {
+    /// The photon mapper's documented defaults.
+    fn default() -> PhotonSettings {
+        PhotonSettings {
+            max_photons: 2_000_000,
+            emit_photons: 1_000_000,
+            sample_photons: 100,
+            sample_dist: 1.0,
+        }
+    }
+}
+
+/// An object: a shape and its material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Primitive {
+    /// The geometry.
+    pub shape: Shape,
+    /// The surface.
+    pub material: Material,
+}
