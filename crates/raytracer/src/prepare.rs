@@ -25,11 +25,15 @@ pub struct TextureSearch {
 }
 
 impl TextureSearch {
-    /// The folders searched for a relative path, in order.
+    /// The folders searched for a relative path, in order, each once.
     pub fn folders(&self) -> Vec<PathBuf> {
-        let mut dirs: Vec<PathBuf> = self.scene_dir.iter().cloned().collect();
-        dirs.extend(self.extra_dirs.iter().cloned());
-        dirs.push(PathBuf::from("."));
+        let mut dirs: Vec<PathBuf> = Vec::new();
+        let candidates = self.scene_dir.iter().chain(&self.extra_dirs).cloned().chain([PathBuf::from(".")]);
+        for dir in candidates {
+            if !dirs.contains(&dir) {
+                dirs.push(dir);
+            }
+        }
         dirs
     }
 

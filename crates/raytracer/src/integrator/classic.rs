@@ -364,6 +364,178 @@ fn mix_tag(tag: &mut Option<&mut u64>, value: u64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::prepare::TextureSearch;
+    use crate::scene::{SourceFile, parse};
+
+    fn scene(text: &str) -> PreparedScene {
+        let parsed = parse(&SourceFile::from_text("test.txt", None, text.to_owned())).expect("valid scene");
+        PreparedScene::new(parsed.scene, &TextureSearch::default()).expect("prepared")
+    }
+
+    /// The colour along one ray, with its ray count and tag.
+    fn shoot(scene: &PreparedScene, origin: DVec3, dir: DVec3) -> (DVec3, u64, u64) {
+        let mut rng = PixelRng::new(0, 0, 0, 0);
+        let mut cx = TraceContext::new(&mut rng);
+        let mut tag = 0;
+        let c =
+            Classic::new(scene).radiance(&mut cx, &Ray::new(origin, dir), Siblings::ALONE, Some(&mut tag));
+        (c, cx.rays, tag)
+    }
+
+    fn close(a: DVec3, b: DVec3) -> bool {
+        (a - b).abs().max_element() < 1e-12
+    }
+
+    const FLOOR: &str = "primitive plane\n N= 0 0 1\n R= 0\n color= 0.5 0.4 0.3\n diff= 0.8\nend\n";
+
+    #[test]
+    fn point_light_straight_above_a_diffuse_plane_gives_color_light_diff() {
+        let s = scene(&format!("light point\n O= 0 0 5\n color= 0.9 0.9 0.9\nend\n{FLOOR}"));
+        let (c, rays, _) = shoot(&s, DVec3::new(0.0, 0.0, 1.0), -DVec3::Z);
+        assert!(close(c, DVec3::new(0.5, 0.4, 0.3) * 0.9 * 0.8), "{c}");
+        assert_eq!(rays, 2, "one camera ray, one shadow ray");
+    }
+
+    #[test]
+    fn ambient_term_is_color_background_diff() {
+        let s = scene(&format!("background\n color= 0.2 0.1 0.0\nend\n{FLOOR}"));
+        let (c, _, _) = shoot(&s, DVec3::new(0.0, 0.0, 1.0), -DVec3::Z);
+        assert!(close(c, DVec3::new(0.5 * 0.2, 0.4 * 0.1, 0.0) * 0.8), "{c}");
+    }
+
+    #[test]
+    fn highlight_is_spec_times_n_dot_l_to_the_twentieth() {
+        // Light at 60 degrees from the normal: N.L = 0.5.
+        let text = "light point\n O= 0 0 0\n color= 1 1 1\nend\n\
+                    primitive plane\n N= 0 0 1\n R= 0\n color= 1 1 1\n spec= 0.5\nend\n";
+        let light = DVec3::new(3f64.sqrt(), 0.0, 1.0) * 2.0;
+        let s = scene(&text.replace("O= 0 0 0", &format!("O= {} {} {}", light.x, light.y, light.z)));
+        // Seen from anywhere: the highlight does not depend on the view.
+        for eye in [DVec3::new(0.0, 0.0, 1.0), DVec3::new(-3.0, 1.0, 0.5)] {
+            let (c, _, _) = shoot(&s, eye, -eye);
+            assert!(close(c, DVec3::splat(0.5 * 0.5f64.powi(20))), "{c}");
+        }
+    }
+
+    #[test]
+    fn shadowed_point_keeps_only_the_ambient_term() {
+        let text = format!(
+            "background\n color= 0.5 0.5 0.5\nend\nlight point\n O= 0 0 5\n color= 1 1 1\nend\n{FLOOR}\
+             primitive sphere\n O= 0 0 2.5\n R= 0.5\n refr= 1\n rindex= 1\nend\n"
+        );
+        let s = scene(&text);
+        let (c, _, lit_tag) = shoot(&s, DVec3::new(2.0, 0.0, 1.0), DVec3::new(-2.0, 0.0, -1.0));
+        assert!(close(c, DVec3::new(0.5, 0.4, 0.3) * 0.5 * 0.8), "transparent objects block fully: {c}");
+        // A lit point of the same surface has another tag: the shadow border is an edge.
+        let (_, _, shadow_tag) = shoot(&s, DVec3::new(2.0, 0.0, 1.0), DVec3::new(0.0, 0.0, -1.0));
+        assert_ne!(lit_tag, shadow_tag);
+    }
+
+    #[test]
+    fn light_behind_the_surface_gives_nothing() {
+        let s = scene(&format!("light point\n O= 0 0 -5\n color= 1 1 1\nend\n{FLOOR}"));
+        let (c, rays, _) = shoot(&s, DVec3::new(0.0, 0.0, 1.0), -DVec3::Z);
+        assert_eq!(c, DVec3::ZERO);
+        assert_eq!(rays, 1, "no shadow ray for a light behind the surface");
+    }
+
+    #[test]
+    fn colours_clamp_at_one() {
+        let s = scene(&format!("light point\n O= 0 0 5\n color= 10 10 10\nend\n{FLOOR}"));
+        let (c, _, _) = shoot(&s, DVec3::new(0.0, 0.0, 1.0), -DVec3::Z);
+        assert_eq!(c, DVec3::ONE);
+    }
+
+    #[test]
+    fn mirror_reflects_the_background_times_refl_and_color() {
+        let text = "background\n color= 0.2 0.4 0.8\nend\n\
+                    primitive plane\n N= 0 0 1\n R= 0\n color= 1 0.5 0.25\n refl= 0.5\nend\n";
+        let (c, rays, _) = shoot(&scene(text), DVec3::new(-1.0, 0.0, 1.0), DVec3::new(1.0, 0.0, -1.0));
+        assert!(close(c, DVec3::new(0.2, 0.2, 0.2) * 0.5), "{c}");
+        assert_eq!(rays, 2);
+    }
+
+    #[test]
+    fn glossy_reflection_of_a_uniform_sky_is_the_mirror_image() {
+        let text = "background\n color= 0.2 0.4 0.8\nend\ncamera\n drefl_quality= 2\nend\n\
+                    primitive plane\n N= 0 0 1\n R= 0\n color= 1 1 1\n refl= 1\n drefl= 0.3\nend\n";
+        let (c, rays, _) = shoot(&scene(text), DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.1, 0.0, -1.0));
+        assert!(close(c, DVec3::new(0.2, 0.4, 0.8)), "{c}");
+        assert_eq!(rays, 1 + 32, "16 * drefl_quality glossy rays");
+    }
+
+    #[test]
+    fn glass_ball_absorbs_along_its_diameter() {
+        let text = "background\n color= 1 1 1\nend\n\
+                    primitive sphere\n O= 0 0 0\n R= 1\n refr= 1\n rindex= 1.5\n absor= 1 0 0.5\nend\n";
+        let (c, rays, _) = shoot(&scene(text), DVec3::new(0.0, -5.0, 0.0), DVec3::Y);
+        assert!((c - DVec3::new((-2.0f64).exp(), 1.0, (-1.0f64).exp())).abs().max_element() < 1e-9, "{c}");
+        assert_eq!(rays, 3, "in, out, background");
+    }
+
+    #[test]
+    fn total_internal_reflection_keeps_the_ray_inside() {
+        // A ray inside a glass ball (index 2, critical angle 30 degrees) hitting the surface at 45
+        // degrees reflects; its path runs around the ball until the depth limit.
+        let text = "background\n color= 1 1 1\nend\n\
+                    primitive sphere\n O= 0 0 0\n R= 1\n refr= 1\n rindex= 2\nend\n";
+        let s = scene(text);
+        let start = DVec3::new(-(0.5f64).sqrt(), -(0.5f64).sqrt(), 0.0) * 0.999;
+        let (c, rays, _) = shoot(&s, start, DVec3::X);
+        assert_eq!(c, DVec3::ZERO, "trapped light never reaches the sky");
+        assert_eq!(rays, MAX_DEPTH as u64);
+    }
+
+    #[test]
+    fn two_facing_mirrors_stop_at_the_depth_limit() {
+        let text = "background\n color= 1 1 1\nend\n\
+                    primitive plane\n N= 0 0 1\n R= 0\n color= 1 1 1\n refl= 1\nend\n\
+                    primitive plane\n N= 0 0 -1\n R= -1\n color= 1 1 1\n refl= 1\nend\n";
+        let (c, rays, _) = shoot(&scene(text), DVec3::new(0.0, 0.0, 0.5), DVec3::Z);
+        assert_eq!(c, DVec3::ZERO);
+        assert_eq!(rays, MAX_DEPTH as u64);
+    }
+
+    #[test]
+    fn fully_visible_area_light_equals_a_point_light_at_its_centre() {
+        let area = scene(&format!(
+            "light area\n O= 0 0 5\n Dx= 1 0 0\n Dy= 0 1 0\n color= 0.9 0.9 0.9\nend\n{FLOOR}"
+        ));
+        let point = scene(&format!("light point\n O= 0 0 5\n color= 0.9 0.9 0.9\nend\n{FLOOR}"));
+        let eye = DVec3::new(0.3, 0.2, 1.0);
+        let (a, rays, _) = shoot(&area, eye, DVec3::new(0.1, -0.3, -1.0));
+        let (p, _, _) = shoot(&point, eye, DVec3::new(0.1, -0.3, -1.0));
+        assert!(close(a, p), "{a} vs {p}");
+        assert_eq!(rays, 1 + 16 * 4, "16 * shade_quality shadow rays (default quality 4)");
+    }
+
+    #[test]
+    fn half_covered_area_light_gives_half_the_light() {
+        // A blocker over x < 0 hides exactly half of the stratified light from the origin.
+        let text = format!(
+            "camera\n shade_quality= 1\nend\nlight square\n O= 0 0 5\n Dx= 1 0 0\n Dy= 0 1 0\n color= 1 1 1\nend\n{FLOOR}\
+             primitive square\n O= -10 0 2.5\n Dx= 10 0 0\n Dy= 0 10 0\nend\n"
+        );
+        let s = scene(&text);
+        let (c, _, _) = shoot(&s, DVec3::new(0.0, 0.0, 1.0), -DVec3::Z);
+        let d = 5.0 / (5.0f64 * 5.0).sqrt();
+        assert!(close(c, DVec3::new(0.5, 0.4, 0.3) * 0.8 * d * 0.5), "{c}");
+    }
+
+    #[test]
+    fn sphere_light_is_visible_and_does_not_shadow_itself() {
+        let text = format!("light sphere\n O= 0 0 5\n R= 1\n color= 2 0.5 0.9\nend\n{FLOOR}");
+        let s = scene(&text);
+        let (seen, rays, _) =
+            shoot(&s, DVec3::new(0.0, 0.0, 10.0), DVec3::new(0.0, 0.0, 1.0).reflect(DVec3::Z).normalize());
+        assert_eq!(seen, DVec3::new(1.0, 0.5, 0.9), "the light's colour, clamped");
+        assert_eq!(rays, 1);
+        let (lit, _, _) = shoot(&s, DVec3::new(0.0, 0.0, 1.0), -DVec3::Z);
+        assert!(
+            close(lit, (DVec3::new(0.5, 0.4, 0.3) * DVec3::new(2.0, 0.5, 0.9) * 0.8).min(DVec3::ONE)),
+            "{lit}"
+        );
+    }
 
     #[test]
     fn refraction_obeys_snell_and_reflects_past_the_critical_angle() {

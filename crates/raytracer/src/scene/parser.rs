@@ -67,7 +67,8 @@ pub fn parse(source: &SourceFile) -> Result<Parsed, SceneError> {
     let mut parser = Parser { source, diagnostics: Vec::new(), scene: Scene::empty(), seen: Seen::default() };
     parser.run();
     let Parser { mut diagnostics, scene, .. } = parser;
-    diagnostics.sort_by_key(|d| d.location.as_ref().map(|l| (l.span.line, l.span.column)));
+    // File order; diagnostics about the whole file last.
+    diagnostics.sort_by_key(|d| d.location.as_ref().map_or((u32::MAX, 0), |l| (l.span.line, l.span.column)));
     if diagnostics.iter().any(Diagnostic::is_error) {
         Err(SceneError { diagnostics })
     } else {
@@ -293,7 +294,8 @@ impl<'s> Parser<'s> {
                     .push("the file ends before the block is closed".into());
             }
         }
-        if self.scene.primitives.is_empty() && self.scene.lights.is_empty() {
+        let has_errors = self.diagnostics.iter().any(Diagnostic::is_error);
+        if self.scene.primitives.is_empty() && self.scene.lights.is_empty() && !has_errors {
             self.diagnostics.push(Diagnostic::general(
                 Severity::Warning,
                 format!("`{}` describes no lights and no primitives", self.source.name()),
@@ -981,3 +983,7 @@ pub fn aspect_mismatch(camera: &CameraSettings, width: u32, height: u32) -> Opti
         )
     })
 }
+
+#[cfg(test)]
+#[path = "parser_tests.rs"]
+mod tests;

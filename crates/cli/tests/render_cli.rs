@@ -1,0 +1,153 @@
+//! `rayterra render` from the outside: exit codes, messages, and files written or not.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn rayterra(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rayterra")).args(args).current_dir(dir).output().expect("run rayterra")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+const SMALL_SCENE: &str = "camera\n O= 0 -4 1\n N= 0 1 0\n image_W= 40\n image_H= 30\n lens_W= 0.8\n lens_H= 0.6\nend\n\
+                           light point\n O= 2 -2 4\n color= 1 1 1\nend\n\
+                           primitive sphere\n O= 0 0 1\n R= 1\n color= 1 0.5 0.2\n diff= 1\n texture= builtin:marble\nend\n\
+                           primitive plane\n N= 0 0 1\n R= 0\n color= 1 1 1\n diff= 0.8\nend\n";
+
+#[test]
+fn renders_a_scene_and_reports_time_and_rays() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    let out = rayterra(&["render", "scene.txt", "-o", "out.png"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("wrote out.png"), "{stdout}");
+    assert!(stdout.contains("40x30 pixels in") && stdout.contains("M rays/s"), "{stdout}");
+    let img = image::open(dir.path().join("out.png")).expect("a PNG");
+    assert_eq!((img.width(), img.height()), (40, 30));
+}
+
+#[test]
+fn size_spp_threads_gamma_and_formats() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    for (name, extra) in [("a.bmp", &["--gamma"][..]), ("b.exr", &[][..]), ("c.hdr", &["--spp", "4"][..])] {
+        let mut args = vec!["render", "scene.txt", "-q", "--size", "24x18", "--threads", "2", "-o", name];
+        args.extend_from_slice(extra);
+        let out = rayterra(&args, dir.path());
+        assert!(out.status.success(), "{name}: {}", text(&out.stderr));
+        assert!(out.stdout.is_empty(), "--quiet prints nothing");
+        let img = image::open(dir.path().join(name)).expect("readable");
+        assert_eq!((img.width(), img.height()), (24, 18), "{name}");
+    }
+}
+
+#[test]
+fn scene_errors_name_file_line_and_column_and_write_nothing() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(
+        dir.path().join("broken.txt"),
+        "primitive sphere\n O= 0 0 0\n R= -1\n color= 1 x 0\nend\n",
+    )
+    .expect("write scene");
+    let out = rayterra(&["render", "broken.txt", "-o", "out.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains(
+            "error: in `primitive sphere`, the radius must be positive, not -1\n --> broken.txt:3:5"
+        ),
+        "{stderr}"
+    );
+    assert!(stderr.contains("--> broken.txt:4:11"), "{stderr}");
+    assert!(stderr.contains("4 |  color= 1 x 0\n  |           ^\n"), "{stderr}");
+    assert!(stderr.contains("error: `broken.txt` has 2 errors; nothing was rendered"), "{stderr}");
+    assert!(!dir.path().join("out.png").exists());
+}
+
+#[test]
+fn check_validates_without_rendering() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(
+        dir.path().join("scene.txt"),
+        format!("{SMALL_SCENE}primitive sphere\n O= 0 0 0\n R= 1\n gloss= 1\nend\n"),
+    )
+    .expect("write scene");
+    let out = rayterra(&["render", "--check", "scene.txt"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("warning: unknown key `gloss=` in `primitive sphere`; ignored"));
+    assert!(
+        text(&out.stdout).contains("scene.txt: ok (3 primitives, 1 lights, 40x30 pixels)"),
+        "{}",
+        text(&out.stdout)
+    );
+    assert!(!dir.path().join("render.png").exists(), "--check renders nothing");
+    let builtin = rayterra(&["render", "--check"], dir.path());
+    assert!(builtin.status.success(), "{}", text(&builtin.stderr));
+    assert!(
+        text(&builtin.stdout)
+            .contains("showcase.txt (built in): ok (9 primitives, 1 lights, 1280x760 pixels)")
+    );
+}
+
+#[test]
+fn missing_texture_is_an_error_at_its_line() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE.replace("builtin:marble", "stone.bmp"))
+        .expect("write");
+    let out = rayterra(&["render", "scene.txt", "-o", "out.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("cannot find texture `stone.bmp` (looked in `./stone.bmp`)"), "{stderr}");
+    assert!(stderr.contains("--> scene.txt:18:11"), "{stderr}");
+    assert!(stderr.contains("--textures DIR"), "{stderr}");
+    assert!(!dir.path().join("out.png").exists());
+    // A corrupt texture file is named with the decoder's reason.
+    std::fs::write(dir.path().join("stone.bmp"), b"BM not really a bitmap").expect("write");
+    let out = rayterra(&["render", "scene.txt", "-o", "out.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("cannot read texture"), "{}", text(&out.stderr));
+    // Found through --textures.
+    std::fs::create_dir(dir.path().join("tex")).expect("mkdir");
+    image::RgbImage::from_pixel(4, 4, image::Rgb([200, 100, 50]))
+        .save(dir.path().join("tex/stone.bmp"))
+        .expect("bmp");
+    std::fs::remove_file(dir.path().join("stone.bmp")).expect("rm");
+    let out = rayterra(&["render", "scene.txt", "-q", "--textures", "tex", "-o", "out.png"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+}
+
+#[test]
+fn bad_requests_are_refused_without_output() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    let cases: [(&[&str], i32, &str); 6] = [
+        (&["render", "scene.txt", "--size", "100000x100000"], 1, "too large"),
+        (&["render", "scene.txt", "--size", "12"], 2, "expected WIDTHxHEIGHT"),
+        (&["render", "scene.txt", "-o", "out.gif"], 1, "use .png, .bmp, .exr or .hdr"),
+        (&["render", "scene.txt", "--spp", "0"], 2, "--spp"),
+        (&["render", "no-such-scene.txt"], 1, "cannot read scene file `no-such-scene.txt`"),
+        (&["render", "scene.txt", "-o", "no/such/dir/out.png"], 1, "cannot write"),
+    ];
+    for (args, code, message) in cases {
+        let out = rayterra(args, dir.path());
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {}", text(&out.stderr));
+        assert!(text(&out.stderr).contains(message), "{args:?}: {}", text(&out.stderr));
+    }
+    let left: Vec<_> =
+        std::fs::read_dir(dir.path()).expect("list").map(|e| e.expect("entry").file_name()).collect();
+    assert_eq!(left, vec![std::ffi::OsString::from("scene.txt")], "nothing written");
+}
+
+#[test]
+fn help_lists_every_option() {
+    let out = rayterra(&["render", "--help"], Path::new("."));
+    let help = text(&out.stdout);
+    for option in
+        ["--output", "--size", "--spp", "--threads", "--textures", "--gamma", "--check", "--seed", "--quiet"]
+    {
+        assert!(help.contains(option), "{option} missing from:\n{help}");
+    }
+}
