@@ -8,11 +8,14 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::accel::Bvh;
-use crate::geometry::{Bounds, Ray, Shape, ShapeHit, ShapePart};
+use crate::geometry::{Bounds, Cylinder, Plane, Ray, Shape, ShapeHit, ShapePart, Sphere, Square};
 use crate::light::Light;
 use crate::procedural;
 use crate::scene::{Diagnostic, Scene, Severity};
 use crate::texture::{Texture, TextureError, TextureRef, TextureSource};
+
+/// Scenes with at most this many bounded primitives test them in a loop instead of a BVH.
+pub const FLAT_LIMIT: usize = 8;
 
 /// Where `texture=` file paths are looked for, in order: the scene file's folder, the extra
 /// folders (`--textures`), then the working directory. Absolute paths are used as they are.
@@ -86,10 +89,13 @@ pub struct PreparedScene {
     textures: Vec<Texture>,
     /// For each primitive, the index of its texture.
     texture_of: Vec<Option<u32>>,
-    /// BVH over the bounded primitives.
+    /// The primitives' shapes, contiguous for the intersection loops.
+    shapes: Vec<Shape>,
+    /// BVH over the bounded primitives, when there are more than [`FLAT_LIMIT`].
     bvh: Bvh,
-    /// Indices of unbounded primitives (planes), tested one by one.
-    unbounded: Vec<u32>,
+    /// Primitives tested one by one: the unbounded ones (planes), and all bounded ones too when
+    /// there are at most [`FLAT_LIMIT`] (a loop beats a tree walk for a handful of shapes).
+    linear: FlatSet,
     /// Rounding-error magnitude of each primitive ([`Shape::magnitude`]).
     magnitudes: Vec<f64>,
     /// Lights with a visible shape: (light index, shape).
@@ -129,13 +135,18 @@ impl PreparedScene {
         }
 
         let mut bounded: Vec<(u32, Bounds)> = Vec::new();
-        let mut unbounded = Vec::new();
+        let mut linear = Vec::new();
         for (i, p) in scene.primitives.iter().enumerate() {
             match p.shape.bounds() {
                 Some(b) => bounded.push((i as u32, b)),
-                None => unbounded.push(i as u32),
+                None => linear.push(i as u32),
             }
         }
+        if bounded.len() <= FLAT_LIMIT {
+            linear.extend(bounded.drain(..).map(|(i, _)| i));
+            linear.sort_unstable();
+        }
+        let linear = FlatSet::new(&linear, &scene);
         let emitters = scene
             .lights
             .iter()
@@ -148,8 +159,9 @@ impl PreparedScene {
             .collect();
         let magnitudes = scene.primitives.iter().map(|p| p.shape.magnitude()).collect();
         Ok(PreparedScene {
+            shapes: scene.primitives.iter().map(|p| p.shape.clone()).collect(),
             bvh: Bvh::build(&bounded),
-            unbounded,
+            linear,
             magnitudes,
             emitters,
             textures,
@@ -163,20 +175,18 @@ impl PreparedScene {
     pub fn closest_hit(&self, ray: &Ray) -> Hit {
         let mut best = Hit::Miss;
         let mut t_max = f64::INFINITY;
-        let prims = &self.scene.primitives;
+        if let Some((primitive, hit)) = self.linear.closest(ray, t_max) {
+            best = Hit::Surface { primitive, hit };
+            t_max = hit.t;
+        }
+        let shapes = &self.shapes;
         self.bvh.closest(ray, 0.0, t_max, |i, limit| {
-            let hit = prims[i as usize].shape.intersect(ray, 0.0, limit)?;
+            let hit = shapes[i as usize].intersect(ray, 0.0, limit)?;
             best = Hit::Surface { primitive: i, hit };
             Some(hit.t)
         });
         if let Hit::Surface { hit, .. } = best {
             t_max = hit.t;
-        }
-        for &i in &self.unbounded {
-            if let Some(hit) = prims[i as usize].shape.intersect(ray, 0.0, t_max) {
-                best = Hit::Surface { primitive: i, hit };
-                t_max = hit.t;
-            }
         }
         for (light, shape) in &self.emitters {
             if let Some(hit) = shape.intersect(ray, 0.0, t_max) {
@@ -190,9 +200,9 @@ impl PreparedScene {
     /// Whether any primitive lies on the ray before distance `t_max` (lights never block).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
-        let prims = &self.scene.primitives;
-        self.unbounded.iter().any(|&i| prims[i as usize].shape.intersect(ray, 0.0, t_max).is_some())
-            || self.bvh.any(ray, 0.0, t_max, |i| prims[i as usize].shape.intersect(ray, 0.0, t_max).is_some())
+        let shapes = &self.shapes;
+        self.linear.any(ray, t_max)
+            || self.bvh.any(ray, 0.0, t_max, |i| shapes[i as usize].intersect(ray, 0.0, t_max).is_some())
     }
 
     /// The rounding-error magnitude of primitive `i` (see [`crate::geometry::offset_origin`]).
@@ -212,6 +222,68 @@ impl PreparedScene {
             }
             None => p.material.color,
         }
+    }
+}
+
+/// Primitives tested in plain loops, one loop per kind of shape, so that every test is inlined
+/// without a dispatch per shape.
+#[derive(Debug, Default)]
+struct FlatSet {
+    spheres: Vec<(u32, Sphere)>,
+    planes: Vec<(u32, Plane)>,
+    squares: Vec<(u32, Square)>,
+    cylinders: Vec<(u32, Cylinder)>,
+}
+
+/// Tests every shape of a list, keeping the nearest hit.
+#[inline]
+fn nearest<S>(
+    list: &[(u32, S)],
+    ray: &Ray,
+    t_max: &mut f64,
+    best: &mut Option<(u32, ShapeHit)>,
+    intersect: impl Fn(&S, &Ray, f64) -> Option<ShapeHit>,
+) {
+    for (i, shape) in list {
+        if let Some(hit) = intersect(shape, ray, *t_max) {
+            *best = Some((*i, hit));
+            *t_max = hit.t;
+        }
+    }
+}
+
+impl FlatSet {
+    fn new(indices: &[u32], scene: &Scene) -> FlatSet {
+        let mut set = FlatSet::default();
+        for &i in indices {
+            match &scene.primitives[i as usize].shape {
+                Shape::Sphere(s) => set.spheres.push((i, s.clone())),
+                Shape::Plane(p) => set.planes.push((i, p.clone())),
+                Shape::Square(q) => set.squares.push((i, q.clone())),
+                Shape::Cylinder(c) => set.cylinders.push((i, c.clone())),
+            }
+        }
+        set
+    }
+
+    /// The nearest hit closer than `t_max`.
+    #[inline]
+    fn closest(&self, ray: &Ray, mut t_max: f64) -> Option<(u32, ShapeHit)> {
+        let mut best = None;
+        nearest(&self.spheres, ray, &mut t_max, &mut best, |s, r, t| s.intersect(r, 0.0, t));
+        nearest(&self.planes, ray, &mut t_max, &mut best, |s, r, t| s.intersect(r, 0.0, t));
+        nearest(&self.squares, ray, &mut t_max, &mut best, |s, r, t| s.intersect(r, 0.0, t));
+        nearest(&self.cylinders, ray, &mut t_max, &mut best, |s, r, t| s.intersect(r, 0.0, t));
+        best
+    }
+
+    /// Whether anything lies on the ray before `t_max`.
+    #[inline]
+    fn any(&self, ray: &Ray, t_max: f64) -> bool {
+        self.spheres.iter().any(|(_, s)| s.intersect(ray, 0.0, t_max).is_some())
+            || self.planes.iter().any(|(_, s)| s.intersect(ray, 0.0, t_max).is_some())
+            || self.squares.iter().any(|(_, s)| s.intersect(ray, 0.0, t_max).is_some())
+            || self.cylinders.iter().any(|(_, s)| s.intersect(ray, 0.0, t_max).is_some())
     }
 }
 

@@ -26,6 +26,10 @@ pub struct Cylinder {
     seam: DVec3,
     /// `axis x seam`: completes the right-handed frame `(seam, seam2, axis)`.
     seam2: DVec3,
+    /// Centre of the smallest sphere around the cylinder (for a quick rejection).
+    bound_centre: DVec3,
+    /// Squared radius of that sphere.
+    bound_radius_sq: f64,
 }
 
 impl Cylinder {
@@ -41,7 +45,17 @@ impl Cylinder {
         }
         let axis = along / height;
         let seam = course_perpendicular(axis);
-        Ok(Cylinder { base, top, radius, axis, height, seam, seam2: axis.cross(seam) })
+        Ok(Cylinder {
+            base,
+            top,
+            radius,
+            axis,
+            height,
+            seam,
+            seam2: axis.cross(seam),
+            bound_centre: (base + top) * 0.5,
+            bound_radius_sq: (height * 0.5).powi(2) + radius * radius,
+        })
     }
 
     /// The nearest hit with `t_min < t < t_max` on the side (height strictly between the caps)
@@ -49,6 +63,14 @@ impl Cylinder {
     /// cylinder hits it from the back.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<ShapeHit> {
+        // Most rays pass far away: reject them against the bounding sphere first (a ray that
+        // starts inside it is always tested in full).
+        let oc = ray.origin - self.bound_centre;
+        let along = oc.dot(ray.dir);
+        let c = oc.length_squared() - self.bound_radius_sq;
+        if c > 0.0 && (along > 0.0 || (oc - along * ray.dir).length_squared() > self.bound_radius_sq) {
+            return None;
+        }
         let ob = ray.origin - self.base;
         let mut best: Option<ShapeHit> = None;
         let mut limit = t_max;
