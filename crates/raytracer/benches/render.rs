@@ -55,8 +55,8 @@ fn main() {
         "rayterra render benchmark: 1280x760, adaptive sampling, median of {runs} runs, {threads} threads"
     );
     println!(
-        "{:<16} {:>9} {:>11} {:>13} {:>18}  {}",
-        "scene", "time", "rays", "Mrays/s", "Mrays/s/thread", "vs course renderer (2 threads)"
+        "{:<16} {:>9} {:>11} {:>13} {:>18}  vs course renderer (2 threads)",
+        "scene", "time", "rays", "Mrays/s", "Mrays/s/thread"
     );
     for case in &cases {
         let scene = load(&case.path);
