@@ -35,7 +35,7 @@ pub struct RenderArgs {
     pub size: Option<(u32, u32)>,
 
     /// Stratified samples in every pixel, instead of adaptive anti-aliasing (one sample per
-    /// pixel, 16 on edges and contrasts).
+    /// pixel, 16 on edges, contrasts and noisy pixels).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
 

@@ -133,8 +133,13 @@ pub fn write_image(image: &Image, path: &Path, gamma: bool) -> Result<(), WriteE
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp =
-        tempfile::Builder::new().prefix(".rayterra-").suffix(".part").tempfile_in(dir).map_err(io)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".rayterra-").suffix(".part");
+    // A temporary file is private; the image should be created like any other file (0666
+    // less the umask).
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder.tempfile_in(dir).map_err(io)?;
     {
         let mut out = BufWriter::new(tmp.as_file_mut());
         let encoded = match format {
@@ -183,6 +188,17 @@ mod tests {
         let names: Vec<_> =
             std::fs::read_dir(dir.path()).expect("list").map(|e| e.expect("entry").file_name()).collect();
         assert_eq!(names.len(), 4, "{names:?}");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn written_files_get_ordinary_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("out.png");
+        write_image(&tiny(), &path, false).expect("written");
+        let mode = std::fs::metadata(&path).expect("metadata").permissions().mode() & 0o777;
+        assert_eq!(mode & 0o644, 0o644, "readable by all, writable by the owner: {mode:o}");
     }
 
     #[test]

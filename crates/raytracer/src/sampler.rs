@@ -4,7 +4,7 @@
 //! image does not depend on how many threads rendered it or in which order.
 
 use rand::{RngExt, SeedableRng};
-use rand_pcg::Pcg32;
+use rand_pcg::Pcg64Mcg;
 
 /// SplitMix64's finaliser: a fast, well-mixing hash of a 64-bit value.
 #[inline]
@@ -23,7 +23,7 @@ pub fn hash_values(values: &[u64]) -> u64 {
 /// The random-number generator of one pixel in one pass.
 #[derive(Clone, Debug)]
 pub struct PixelRng {
-    rng: Pcg32,
+    rng: Pcg64Mcg,
     /// A key identifying the pixel and pass (for per-pixel decisions shared by its samples).
     key: u64,
 }
@@ -32,7 +32,7 @@ impl PixelRng {
     /// The generator of pixel `(x, y)` in pass `pass` of a render seeded with `seed`.
     pub fn new(seed: u64, x: u32, y: u32, pass: u32) -> PixelRng {
         let key = hash_values(&[seed, x as u64, y as u64, pass as u64]);
-        PixelRng { rng: Pcg32::seed_from_u64(key), key }
+        PixelRng { rng: Pcg64Mcg::seed_from_u64(key), key }
     }
 
     /// A uniform number in [0, 1).

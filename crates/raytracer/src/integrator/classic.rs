@@ -269,7 +269,7 @@ impl<'s> Classic<'s> {
         for j in 0..k {
             let s = sib.stratum(j, total, shift);
             let (xi, xi2) = strata.sample(s, cx.rng);
-            let rho = xi.exp2() - 1.0;
+            let rho = (xi as f32).exp2() as f64 - 1.0;
             // Single precision is ample for a perturbation of at most `drefl`, and twice as fast.
             let (sin, cos) = (std::f32::consts::TAU * xi2 as f32).sin_cos();
             let dir = r + drefl * rho * (cos as f64 * b1 + sin as f64 * b2);
