@@ -141,14 +141,19 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
 
     let bar = progress_bar(args.quiet);
     let report = |p: Progress| {
-        if bar.length() != Some(p.total) {
+        let message = match p.stage {
+            Stage::Tracing => "tracing rows",
+            Stage::Refining => "refining pixels",
+        };
+        if bar.message() != message {
+            bar.set_message(message);
             bar.set_length(p.total);
-            bar.set_message(match p.stage {
-                Stage::Tracing => "tracing rows",
-                Stage::Refining => "refining edges",
-            });
+            bar.set_position(0);
         }
-        bar.set_position(p.done);
+        // Reports come from several threads and may arrive out of order.
+        if p.done > bar.position() {
+            bar.set_position(p.done);
+        }
     };
     let render_started = Instant::now();
     let rendered = raytracer::render(&prepared, &settings, &report).map_err(|e| fail(&e.to_string()))?;
@@ -167,7 +172,7 @@ fn progress_bar(quiet: bool) -> ProgressBar {
         return ProgressBar::hidden();
     }
     // Draws on stderr, and only when it is a terminal.
-    let bar = ProgressBar::new(1);
+    let bar = ProgressBar::new(1).with_message("loading");
     if let Ok(style) =
         ProgressStyle::with_template("{msg:>14} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
     {
