@@ -559,6 +559,18 @@ impl<'p, 's> BlockReader<'p, 's> {
         }
     }
 
+    /// A required vector (see [`BlockReader::required`]).
+    fn required_vec3(&mut self, key: &str, meaning: &str) -> Option<DVec3> {
+        let value = self.vec3(key);
+        self.required(key, value, meaning)
+    }
+
+    /// A required number (see [`BlockReader::required`]).
+    fn required_number(&mut self, key: &str, meaning: &str) -> Option<f64> {
+        let value = self.number(key);
+        self.required(key, value, meaning)
+    }
+
     /// A weight that should not be negative; negative values are kept, with a warning.
     fn weight(&mut self, key: &str) -> f64 {
         match self.number(key) {
@@ -711,37 +723,25 @@ impl<'p, 's> BlockReader<'p, 's> {
             }
             Err(Reported) => DVec3::ZERO,
         };
-        let o = self.vec3("O");
-        let o = self.required("O", o, "the light's position");
+        let o = self.required_vec3("O", "the light's position");
         let light = match kind {
             LightKind::Point => o.map(|position| Light::Point { position, color }),
             LightKind::Square => {
-                let dx = self.vec3("Dx");
-                let dx = self.required("Dx", dx, "the first half axis");
-                let dy = self.vec3("Dy");
-                let dy = self.required("Dy", dy, "the second half axis");
+                let dx = self.required_vec3("Dx", "the first half axis");
+                let dy = self.required_vec3("Dy", "the second half axis");
                 match (o, dx, dy) {
-                    (Some(o), Some(dx), Some(dy)) => match Square::new(o, dx, dy) {
-                        Ok(shape) => Some(Light::Square { shape, color }),
-                        Err(e) => {
-                            self.geometry_error(e);
-                            None
-                        }
-                    },
+                    (Some(o), Some(dx), Some(dy)) => {
+                        self.built(Square::new(o, dx, dy)).map(|shape| Light::Square { shape, color })
+                    }
                     _ => None,
                 }
             }
             LightKind::Sphere => {
-                let r = self.number("R");
-                let r = self.required("R", r, "the radius");
+                let r = self.required_number("R", "the radius");
                 match (o, r) {
-                    (Some(o), Some(r)) => match Sphere::new(o, r) {
-                        Ok(shape) => Some(Light::Sphere { shape, color }),
-                        Err(e) => {
-                            self.geometry_error(e);
-                            None
-                        }
-                    },
+                    (Some(o), Some(r)) => {
+                        self.built(Sphere::new(o, r)).map(|shape| Light::Sphere { shape, color })
+                    }
                     _ => None,
                 }
             }
@@ -811,38 +811,28 @@ impl<'p, 's> BlockReader<'p, 's> {
         let material = self.material();
         let shape = match kind {
             PrimitiveKind::Sphere => {
-                let o = self.vec3("O");
-                let o = self.required("O", o, "the centre");
-                let r = self.number("R");
-                let r = self.required("R", r, "the radius");
+                let o = self.required_vec3("O", "the centre");
+                let r = self.required_number("R", "the radius");
                 let pole = self.vec3("De").ok().flatten().unwrap_or(DVec3::Z);
                 let seam = self.vec3("Dc").ok().flatten().unwrap_or(DVec3::Y);
                 match (o, r) {
-                    (Some(o), Some(r)) => self.shape(Sphere::with_frame(o, r, pole, seam).map(Shape::Sphere)),
+                    (Some(o), Some(r)) => self.built(Sphere::with_frame(o, r, pole, seam).map(Shape::Sphere)),
                     _ => None,
                 }
             }
             PrimitiveKind::Plane => {
-                let n = self.vec3("N");
-                let n = self.required("N", n, "the normal");
-                let r = self.number("R");
-                let r = self.required("R", r, "the offset from the origin along the normal");
+                let n = self.required_vec3("N", "the normal");
+                let r = self.required_number("R", "the offset from the origin along the normal");
                 let dx = self.vec3("Dx");
                 let dy = self.vec3("Dy");
                 let (n, r) = match (n, r) {
                     (Some(n), Some(r)) => (n, r),
                     _ => return,
                 };
-                let plane = match Plane::new(n, r) {
-                    Ok(p) => p,
-                    Err(e) => {
-                        self.geometry_error(e);
-                        return;
-                    }
-                };
+                let Some(plane) = self.built(Plane::new(n, r)) else { return };
                 match (dx, dy) {
                     (Ok(Some(dx)), Ok(Some(dy))) => {
-                        self.shape(plane.with_texture_axes(dx, dy).map(Shape::Plane))
+                        self.built(plane.with_texture_axes(dx, dy).map(Shape::Plane))
                     }
                     (Ok(None), _) | (_, Ok(None)) if material.texture.is_some() => {
                         let header = self.header;
@@ -856,24 +846,18 @@ impl<'p, 's> BlockReader<'p, 's> {
                 }
             }
             PrimitiveKind::Square => {
-                let o = self.vec3("O");
-                let o = self.required("O", o, "the centre");
-                let dx = self.vec3("Dx");
-                let dx = self.required("Dx", dx, "the first half axis");
-                let dy = self.vec3("Dy");
-                let dy = self.required("Dy", dy, "the second half axis");
+                let o = self.required_vec3("O", "the centre");
+                let dx = self.required_vec3("Dx", "the first half axis");
+                let dy = self.required_vec3("Dy", "the second half axis");
                 match (o, dx, dy) {
-                    (Some(o), Some(dx), Some(dy)) => self.shape(Square::new(o, dx, dy).map(Shape::Square)),
+                    (Some(o), Some(dx), Some(dy)) => self.built(Square::new(o, dx, dy).map(Shape::Square)),
                     _ => None,
                 }
             }
             PrimitiveKind::Cylinder => {
-                let o1 = self.vec3("O1");
-                let o1 = self.required("O1", o1, "the bottom cap centre");
-                let o2 = self.vec3("O2");
-                let o2 = self.required("O2", o2, "the top cap centre");
-                let r = self.number("R");
-                let r = self.required("R", r, "the radius");
+                let o1 = self.required_vec3("O1", "the bottom cap centre");
+                let o2 = self.required_vec3("O2", "the top cap centre");
+                let r = self.required_number("R", "the radius");
                 for key in ["De", "Dc"] {
                     if let Some(e) = self.entry(key) {
                         self.parser
@@ -888,7 +872,7 @@ impl<'p, 's> BlockReader<'p, 's> {
                 }
                 match (o1, o2, r) {
                     (Some(o1), Some(o2), Some(r)) => {
-                        self.shape(Cylinder::new(o1, o2, r).map(Shape::Cylinder))
+                        self.built(Cylinder::new(o1, o2, r).map(Shape::Cylinder))
                     }
                     _ => None,
                 }
@@ -899,8 +883,9 @@ impl<'p, 's> BlockReader<'p, 's> {
         }
     }
 
-    fn shape(&mut self, shape: Result<Shape, GeometryError>) -> Option<Shape> {
-        shape.map_err(|e| self.geometry_error(e)).ok()
+    /// The constructed value, or `None` after reporting why it could not be built.
+    fn built<T>(&mut self, value: Result<T, GeometryError>) -> Option<T> {
+        value.map_err(|e| self.geometry_error(e)).ok()
     }
 
     /// Warns about keys the block does not know.
