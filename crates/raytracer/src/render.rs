@@ -172,12 +172,16 @@ const REFINE_PASS: u32 = 1;
 impl<'s> Renderer<'s> {
     fn new(scene: &'s PreparedScene, settings: &'s RenderSettings) -> Renderer<'s> {
         let (w, h) = (settings.width, settings.height);
-        // Autofocus: the distance to the surface at the image centre.
-        let probe = Camera::new(&scene.scene.camera, w, h, 1.0);
-        let focus = match scene.closest_hit(&probe.central_ray()) {
-            Hit::Surface { hit, .. } => hit.t,
-            Hit::Emitter { t, .. } => t,
-            Hit::Miss => 1.0,
+        let cam = &scene.scene.camera;
+        // Autofocus (a lens without `focal_dist=`): the distance to the surface at the centre.
+        let focus = if cam.aperture > 0.0 && cam.focal_distance.is_none() {
+            match scene.closest_hit(&Camera::new(cam, w, h, 1.0).central_ray()) {
+                Hit::Surface { hit, .. } => hit.t,
+                Hit::Emitter { t, .. } => t,
+                Hit::Miss => 1.0,
+            }
+        } else {
+            1.0
         };
         Renderer {
             integrator: Classic::new(scene),
@@ -195,23 +199,25 @@ impl<'s> Renderer<'s> {
         };
         let mut colors = vec![DVec3::ZERO; w * h];
         let n_tracked = if track_tags { w * h } else { 0 };
-        let mut tags = vec![PixelTrace::default(); n_tracked];
+        let mut traces = vec![PixelTrace::default(); n_tracked];
         let rows_done = AtomicU64::new(0);
         let first = Strata::for_count(first_samples);
-        let trace_row = |y: usize, row: &mut [DVec3], mut row_tags: Option<&mut [PixelTrace]>| {
+        let trace_row = |y: usize, row: &mut [DVec3], mut row_traces: Option<&mut [PixelTrace]>| {
+            let mut rays = 0;
             for (x, c) in row.iter_mut().enumerate() {
-                let trace = row_tags.as_deref_mut().map(|t| &mut t[x]);
-                *c = self.pixel(x as u32, y as u32, FIRST_PASS, first, trace);
+                let trace = row_traces.as_deref_mut().map(|t| &mut t[x]);
+                *c = self.pixel(x as u32, y as u32, FIRST_PASS, first, trace, &mut rays);
             }
+            self.rays.fetch_add(rays, Ordering::Relaxed);
             let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
             progress(Progress { stage: Stage::Tracing, done, total: h as u64 });
         };
         if track_tags {
             colors
                 .par_chunks_mut(w)
-                .zip(tags.par_chunks_mut(w))
+                .zip(traces.par_chunks_mut(w))
                 .enumerate()
-                .for_each(|(y, (row, row_tags))| trace_row(y, row, Some(row_tags)));
+                .for_each(|(y, (row, row_traces))| trace_row(y, row, Some(row_traces)));
         } else {
             colors.par_chunks_mut(w).enumerate().for_each(|(y, row)| trace_row(y, row, None));
         }
@@ -219,7 +225,7 @@ impl<'s> Renderer<'s> {
 
         let mut refined_pixels = 0;
         if track_tags {
-            let flagged = edge_pixels(&colors, &tags, w, h);
+            let flagged = pixels_to_refine(&colors, &traces, w, h);
             refined_pixels = flagged.len() as u64;
             let grid = Strata { nx: REFINE_GRID, ny: REFINE_GRID };
             let done = AtomicU64::new(0);
@@ -229,10 +235,14 @@ impl<'s> Renderer<'s> {
             let refined: Vec<DVec3> = flagged
                 .par_chunks(CHUNK)
                 .flat_map_iter(|chunk| {
+                    let mut rays = 0;
                     let values: Vec<DVec3> = chunk
                         .iter()
-                        .map(|&i| self.pixel((i % w) as u32, (i / w) as u32, REFINE_PASS, grid, None))
+                        .map(|&i| {
+                            self.pixel((i % w) as u32, (i / w) as u32, REFINE_PASS, grid, None, &mut rays)
+                        })
                         .collect();
+                    self.rays.fetch_add(rays, Ordering::Relaxed);
                     let finished = done.fetch_add(chunk.len() as u64, Ordering::Relaxed) + chunk.len() as u64;
                     progress(Progress { stage: Stage::Refining, done: finished, total });
                     values
@@ -258,8 +268,16 @@ impl<'s> Renderer<'s> {
 
     /// The colour of pixel `(x, y)` (0, 0 at the top left) from `strata.count()` camera samples
     /// (at the centre for a single sample, jittered in each cell otherwise). With `trace`, records
-    /// the pixel's tag and noise estimate.
-    fn pixel(&self, x: u32, y: u32, pass: u32, strata: Strata, mut trace: Option<&mut PixelTrace>) -> DVec3 {
+    /// the pixel's tag and noise estimate. Adds the rays traced to `rays`.
+    fn pixel(
+        &self,
+        x: u32,
+        y: u32,
+        pass: u32,
+        strata: Strata,
+        mut trace: Option<&mut PixelTrace>,
+        rays: &mut u64,
+    ) -> DVec3 {
         let mut rng = PixelRng::new(self.settings.seed, x, y, pass);
         let n = strata.count();
         // Nested estimates are shared among ceil(sqrt(n)) groups of samples, so their sample
@@ -278,7 +296,7 @@ impl<'s> Renderer<'s> {
         if let Some(t) = trace {
             t.error = (cx.variance / n as f64).sqrt() as f32;
         }
-        self.rays.fetch_add(cx.rays, Ordering::Relaxed);
+        *rays += cx.rays;
         sum / n as f64
     }
 }
@@ -295,7 +313,7 @@ struct PixelTrace {
 /// Indices of the pixels to refine: an estimated error above [`NOISE_THRESHOLD`], a tag different
 /// from a 4-neighbour's, or a colour differing from a 4-neighbour's by more than
 /// [`CONTRAST_THRESHOLD`] in some channel.
-fn edge_pixels(colors: &[DVec3], traces: &[PixelTrace], w: usize, h: usize) -> Vec<usize> {
+fn pixels_to_refine(colors: &[DVec3], traces: &[PixelTrace], w: usize, h: usize) -> Vec<usize> {
     let differs = |a: usize, b: usize| {
         traces[a].tag != traces[b].tag || (colors[a] - colors[b]).abs().max_element() > CONTRAST_THRESHOLD
     };
