@@ -1,2 +1,15 @@
 //! The terrain engine: a height-mapped island standing in a translucent, reflecting sea under a
 //! sky box, drawn with wgpu. World convention: **y-up**, the water is the plane y = 0.
+//!
+//! - [`world`]: the data to draw (heightmap, textures, sky), loaded or generated. No GPU.
+//! - [`camera`]: the fly camera, a pure state machine fed with input and time.
+//! - [`config`]: the scene's numbers (the course's by default).
+//!
+//! The library never prints, exits or parses command lines: it returns values and typed errors.
+
+pub mod camera;
+pub mod config;
+pub mod output;
+pub mod world;
+
+pub use config::SceneConfig;
