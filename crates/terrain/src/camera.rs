@@ -64,6 +64,49 @@ impl CameraPose {
     }
 }
 
+/// Why a text is not a camera pose.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PoseSyntaxError {
+    /// Not five comma-separated values.
+    #[error("expected five comma-separated numbers x,y,z,yaw,pitch, found {0} value(s)")]
+    Count(usize),
+    /// A value is not a finite number.
+    #[error("`{0}` is not a finite number")]
+    Number(String),
+    /// The pitch is beyond the vertical limit.
+    #[error(
+        "pitch {0} is out of range: it must be between -{MAX_PITCH_DEGREES} and {MAX_PITCH_DEGREES} degrees"
+    )]
+    Pitch(String),
+}
+
+impl std::str::FromStr for CameraPose {
+    type Err = PoseSyntaxError;
+
+    /// Parses `x,y,z,yaw,pitch`: a position in world units, then yaw and pitch in degrees.
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+        let [x, y, z, yaw, pitch] = parts[..] else {
+            return Err(PoseSyntaxError::Count(parts.len()));
+        };
+        let number = |part: &str| {
+            part.parse::<f32>()
+                .ok()
+                .filter(|value| value.is_finite())
+                .ok_or_else(|| PoseSyntaxError::Number(part.to_string()))
+        };
+        let pitch_degrees = number(pitch)?;
+        if pitch_degrees.abs() > MAX_PITCH_DEGREES {
+            return Err(PoseSyntaxError::Pitch(pitch.to_string()));
+        }
+        Ok(CameraPose::new(
+            Vec3::new(number(x)?, number(y)?, number(z)?),
+            number(yaw)?,
+            pitch_degrees,
+        ))
+    }
+}
+
 /// A perspective projection.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Lens {
@@ -348,6 +391,31 @@ mod tests {
         // The view matrix puts the forward direction on the camera's -z axis.
         let seen = pose.view_matrix().transform_vector3(pose.forward());
         assert!(seen.abs_diff_eq(-Vec3::Z, 1e-6));
+    }
+
+    #[test]
+    fn parses_poses() {
+        let pose: CameraPose = "1, 2.5,-3,90,-10".parse().expect("valid");
+        assert_eq!(
+            pose,
+            CameraPose::new(Vec3::new(1.0, 2.5, -3.0), 90.0, -10.0)
+        );
+        assert_eq!(
+            "1,2,3".parse::<CameraPose>(),
+            Err(PoseSyntaxError::Count(3))
+        );
+        assert_eq!(
+            "1,2,3,4,x".parse::<CameraPose>(),
+            Err(PoseSyntaxError::Number("x".into()))
+        );
+        assert_eq!(
+            "1,2,inf,4,0".parse::<CameraPose>(),
+            Err(PoseSyntaxError::Number("inf".into()))
+        );
+        assert_eq!(
+            "0,0,0,0,95".parse::<CameraPose>(),
+            Err(PoseSyntaxError::Pitch("95".into()))
+        );
     }
 
     #[test]

@@ -5,7 +5,7 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::camera::CameraPose;
+use crate::camera::{CameraPose, Limits};
 
 /// The numbers that lay out the scene. `Default` gives the course's values.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,6 +66,17 @@ impl SceneConfig {
     /// Grey level whose world height is `height`: the inverse of [`Self::height_of_level`].
     pub fn level_of_height(&self, height: f32) -> f32 {
         height / self.unit_height - self.level_offset
+    }
+
+    /// Where the fly camera may go: inside the sky box (1 unit from its walls and ceiling) and
+    /// at least 0.2 units above the water and the terrain.
+    pub fn camera_limits(&self) -> Limits {
+        let half = self.sky_box_size * 0.5;
+        Limits {
+            min: Vec3::new(-half.x + 1.0, 0.0, -half.z + 1.0),
+            max: Vec3::new(half.x - 1.0, self.sky_box_size.y - 1.0, half.z - 1.0),
+            clearance: 0.2,
+        }
     }
 
     /// Offset of the water texture at `time_seconds`, in texture repeats, wrapped into [0, 1)

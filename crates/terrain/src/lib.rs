@@ -6,6 +6,7 @@
 //! - [`config`]: the scene's numbers (the course's by default).
 //! - [`render`]: the wgpu renderer, drawing into any texture.
 //! - [`headless`]: one frame off-screen, read back as an image.
+//! - [`window`]: the interactive window (winit), using the same renderer.
 //!
 //! The library never prints, exits or parses command lines: it returns values and typed errors.
 
@@ -14,6 +15,7 @@ pub mod config;
 pub mod headless;
 pub mod output;
 pub mod render;
+pub mod window;
 pub mod world;
 
 pub use config::SceneConfig;

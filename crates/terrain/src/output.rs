@@ -16,6 +16,12 @@ pub enum SaveError {
         /// What the system said.
         source: std::io::Error,
     },
+    /// The file name's extension names no image format this program writes.
+    #[error("cannot tell which image format to write for {}: use .png, .bmp or .jpg", path.display())]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
     /// The encoder failed (e.g. an image too large for the format).
     #[error("cannot encode {}: {source}", path.display())]
     Encode {
@@ -26,9 +32,26 @@ pub enum SaveError {
     },
 }
 
-/// The image format for `path`'s extension (PNG when it has none or an unknown one).
-pub fn format_for(path: &Path) -> ImageFormat {
-    ImageFormat::from_path(path).unwrap_or(ImageFormat::Png)
+/// The image format for `path`'s extension: PNG, BMP or JPEG.
+pub fn format_for(path: &Path) -> Result<ImageFormat, SaveError> {
+    match ImageFormat::from_path(path) {
+        Ok(format @ (ImageFormat::Png | ImageFormat::Bmp | ImageFormat::Jpeg)) => Ok(format),
+        _ => Err(SaveError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
+    }
+}
+
+/// Writes a rendered frame to `path` in the format its extension names (PNG keeps the alpha
+/// channel; BMP and JPEG are written as RGB), atomically.
+pub fn save_frame(frame: &image::RgbaImage, path: &Path) -> Result<(), SaveError> {
+    let format = format_for(path)?;
+    let image = DynamicImage::ImageRgba8(frame.clone());
+    let image = match format {
+        ImageFormat::Png => image,
+        _ => DynamicImage::ImageRgb8(image.into_rgb8()),
+    };
+    save_image(&image, path, format)
 }
 
 /// Writes `image` to `path` in `format`, atomically: the image is encoded into a temporary file
@@ -82,7 +105,7 @@ mod tests {
             image::Rgba([1, 2, 3, 255]),
         ));
         let path = dir.join("shot.png");
-        save_image(&image, &path, format_for(&path)).expect("writable");
+        save_image(&image, &path, ImageFormat::Png).expect("writable");
         let back = image::open(&path).expect("readable").into_rgba8();
         assert_eq!(back.get_pixel(2, 1).0, [1, 2, 3, 255]);
         // Only the image is left in the folder: no temporary file.
@@ -100,8 +123,33 @@ mod tests {
 
     #[test]
     fn format_follows_the_extension() {
-        assert_eq!(format_for(Path::new("a.bmp")), ImageFormat::Bmp);
-        assert_eq!(format_for(Path::new("a.PNG")), ImageFormat::Png);
-        assert_eq!(format_for(Path::new("a")), ImageFormat::Png);
+        assert_eq!(format_for(Path::new("a.bmp")).ok(), Some(ImageFormat::Bmp));
+        assert_eq!(format_for(Path::new("a.PNG")).ok(), Some(ImageFormat::Png));
+        assert_eq!(
+            format_for(Path::new("a.jpeg")).ok(),
+            Some(ImageFormat::Jpeg)
+        );
+        assert!(matches!(
+            format_for(Path::new("a")),
+            Err(SaveError::UnknownFormat { .. })
+        ));
+        assert!(matches!(
+            format_for(Path::new("a.txt")),
+            Err(SaveError::UnknownFormat { .. })
+        ));
+    }
+
+    #[test]
+    fn frames_are_written_in_the_extensions_format() {
+        let dir = std::env::temp_dir().join(format!("rayterra-frames-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let frame = image::RgbaImage::from_pixel(4, 3, image::Rgba([200, 100, 50, 255]));
+        for name in ["f.png", "f.bmp", "f.jpg"] {
+            save_frame(&frame, &dir.join(name)).expect("writable");
+            let back = image::open(dir.join(name)).expect("readable").into_rgb8();
+            let pixel = back.get_pixel(1, 1).0;
+            assert!((i32::from(pixel[0]) - 200).abs() < 8, "{name}: {pixel:?}");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -23,7 +23,11 @@ pub const ASSET_FILES: [&str; 9] = [
 /// File names are matched without regard to case, and the sky files may also sit in a `SkyBox`
 /// subfolder (as in some course repositories). When files are missing the error lists all of them.
 pub fn load_course_folder(dir: &Path) -> Result<World, WorldError> {
-    if !dir.is_dir() {
+    let metadata = std::fs::metadata(dir).map_err(|source| WorldError::Read {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    if !metadata.is_dir() {
         return Err(WorldError::NotAFolder {
             path: dir.to_path_buf(),
         });

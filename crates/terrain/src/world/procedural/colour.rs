@@ -66,7 +66,7 @@ pub fn colour_map(heightmap: &Heightmap, config: &SceneConfig, seed: u32) -> Rgb
         let (u, v) = (x as f64 / width as f64, y as f64 / height as f64);
         let patch = patches.get([u * 9.0, v * 9.0]);
         let fine = grain.get([u * 60.0, v * 60.0]);
-        let band = bands.get([h * 6.0, u * 3.0, v * 3.0]);
+        let band = bands.get([h * 2.5, u * 4.0, v * 4.0]);
 
         // Lowland: grass of varying shade, with darker woods in patches.
         let grass = mix(

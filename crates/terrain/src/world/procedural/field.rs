@@ -80,8 +80,12 @@ pub fn image_from_fn(
 }
 
 /// A `width` x `height` grid of values, row by row, computed in parallel.
-pub fn grid_from_fn(width: u32, height: u32, value: impl Fn(u32, u32) -> f64 + Sync) -> Vec<f64> {
-    let mut data = vec![0.0; width as usize * height as usize];
+pub fn grid_from_fn<T: Copy + Default + Send>(
+    width: u32,
+    height: u32,
+    value: impl Fn(u32, u32) -> T + Sync,
+) -> Vec<T> {
+    let mut data = vec![T::default(); width as usize * height as usize];
     data.par_chunks_mut(width as usize)
         .enumerate()
         .for_each(|(y, row)| {

@@ -10,8 +10,10 @@ use crate::world::{Heightmap, HeightmapError};
 /// Distance from the map's centre to the coast, in map half-widths, before the coast's noise.
 const COAST_RADIUS: f64 = 0.70;
 
-/// Height the mountains round off toward, in world units.
-const PEAK_HEIGHT: f64 = 2.2;
+/// Height of the highest peaks (all but the top 0.05% of the map), in world units.
+const PEAK_HEIGHT: f64 = 2.15;
+/// Height the summits round off toward, in world units.
+const MAX_HEIGHT: f64 = 2.3;
 
 /// Generates a `size` x `size` island heightmap for `seed`, in grey levels placed with `config`'s
 /// height mapping (the coast is at the level of y = 0). Bit-identical for the same arguments.
@@ -24,19 +26,20 @@ pub fn island_heightmap(
     Heightmap::check_size(size, size)?;
     let warp_x = Fbm::<Perlin>::new(layer_seed(seed, 1)).set_octaves(4);
     let warp_z = Fbm::<Perlin>::new(layer_seed(seed, 2)).set_octaves(4);
-    let hills = Fbm::<Perlin>::new(layer_seed(seed, 3)).set_octaves(7);
-    let ridges = RidgedMulti::<Perlin>::new(layer_seed(seed, 4)).set_octaves(6);
+    let hills = Fbm::<Perlin>::new(layer_seed(seed, 3)).set_octaves(5);
+    let ridges = RidgedMulti::<Perlin>::new(layer_seed(seed, 4)).set_octaves(5);
+    let massifs = Fbm::<Perlin>::new(layer_seed(seed, 6)).set_octaves(3);
     let coast = Fbm::<Perlin>::new(layer_seed(seed, 5)).set_octaves(5);
     let lowest = config.level_of_height(-1.2) as f64;
-    let highest = config.level_of_height(2.25) as f64;
+    let highest = config.level_of_height(MAX_HEIGHT as f32) as f64;
     let scale = 2.0 / size as f64;
     let elevations = grid_from_fn(size, size, |x, y| {
         // Position in [-1, 1]^2, pixel centres.
         let px = (x as f64 + 0.5) * scale - 1.0;
         let pz = (y as f64 + 0.5) * scale - 1.0;
         // Domain warp: bends coasts and valleys so they do not look like blobs of noise.
-        let qx = px + 0.30 * warp_x.get([px * 1.3, pz * 1.3]);
-        let qz = pz + 0.30 * warp_z.get([px * 1.3 + 5.2, pz * 1.3 + 1.7]);
+        let qx = px + 0.22 * warp_x.get([px * 1.3, pz * 1.3]);
+        let qz = pz + 0.22 * warp_z.get([px * 1.3 + 5.2, pz * 1.3 + 1.7]);
         // Signed distance to a ragged coast, in map half-widths: positive inland.
         // A squircle rather than a circle: the island fills more of the square map while its
         // border stays under water.
@@ -44,23 +47,44 @@ pub fn island_heightmap(
             (qx.powi(4) + qz.powi(4)).sqrt().sqrt() + 0.20 * coast.get([qx * 2.2, qz * 2.2]);
         let inland = COAST_RADIUS - radius;
         let hill = hills.get([qx * 2.6, qz * 2.6]);
-        let ridge = ((ridges.get([qx * 1.7 + 3.1, qz * 1.7 - 2.3]) + 1.0) * 0.5).clamp(0.0, 1.0);
-        // World height: a slope through the coastline, levelling off into a sea floor, hills
-        // on land and ridged mountains further inland.
-        let slope = inland * 3.2;
+        let ridge = ((ridges.get([qx * 0.9 + 3.1, qz * 0.9 - 2.3]) + 1.0) * 0.5).max(0.0);
+        // World height: a slope through the coastline that levels off into rolling lowlands
+        // inland and into a sea floor offshore, with ridged mountains further inland.
+        let lowland = 0.42 + 0.45 * hill;
+        let profile = -smooth_max(-inland * 3.0, -lowland, 0.25);
         let floor = -1.05 + 0.2 * hill;
-        let base = smooth_max(slope, floor, 0.3);
-        let hills_here = 0.35 * (hill + 0.3) * smoothstep(-0.02, 0.25, inland);
-        let mountains = 1.3 * ridge * ridge * smoothstep(0.05, 0.4, inland);
-        // Peaks round off below the top of the height range instead of being cut flat.
-        let height = -smooth_max(-(base + hills_here + mountains), -PEAK_HEIGHT, 0.4);
-        f64::from(config.level_of_height(height as f32)).clamp(lowest, highest)
+        let base = smooth_max(profile, floor, 0.3);
+        // Mountains rise where a broad noise is high, so they are rounded where it peaks and
+        // slope gently where it falls (masks would make flat tops and cliffs); ridged noise
+        // only sharpens their crests.
+        let uplift = (massifs.get([qx * 1.1 + 7.3, qz * 1.1 - 4.1]) + 0.1).max(0.0);
+        let mountains = uplift.powf(1.4) * (0.55 + 0.45 * ridge) * smoothstep(0.0, 0.35, inland);
+        (base, mountains)
     });
-    Heightmap::new(
-        size,
-        size,
-        elevations.into_iter().map(|level| level as f32).collect(),
-    )
+    // Scale the mountains so that, whatever the seed, the highest peaks (all but the top 0.05% of the map)
+    // reach `PEAK_HEIGHT`: every island gets snow-capped summits and none is cut flat.
+    let mut heights: Vec<f64> = elevations
+        .iter()
+        .map(|&(base, mountain)| base + mountain)
+        .collect();
+    heights.sort_by(f64::total_cmp);
+    let top = heights.len() * 9995 / 10000;
+    let (base_at_top, mountain_at_top) = elevations
+        .iter()
+        .copied()
+        .find(|&(base, mountain)| base + mountain == heights[top])
+        .unwrap_or((0.0, 1.0));
+    let scale = ((PEAK_HEIGHT - base_at_top) / mountain_at_top.max(1e-3)).clamp(0.0, 10.0);
+    let levels = elevations
+        .into_iter()
+        .map(|(base, mountain)| {
+            let height = base + mountain * scale;
+            // Peaks round off just below the top of the height range.
+            let height = -smooth_max(-height, -MAX_HEIGHT, 0.3);
+            f64::from(config.level_of_height(height as f32)).clamp(lowest, highest) as f32
+        })
+        .collect();
+    Heightmap::new(size, size, levels)
 }
 
 /// A maximum of `a` and `b` with a rounded corner of width `k` (polynomial smooth maximum).
