@@ -6,7 +6,7 @@
 //! velocity and displacement over a step are integrated exactly, so one step of 0.1 s moves the
 //! camera exactly as far as ten steps of 0.01 s.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 
 /// Where the camera is and where it looks.
 ///
@@ -129,6 +129,35 @@ impl Lens {
             self.near,
             self.far,
         )
+    }
+}
+
+/// The six planes bounding what a camera sees, for culling.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frustum {
+    /// Planes as (normal, offset): a point p is inside when `normal.dot(p) + offset >= 0` for all.
+    planes: [Vec4; 6],
+}
+
+impl Frustum {
+    /// The frustum of a world-to-clip matrix with wgpu's depth range 0..1.
+    pub fn from_view_projection(matrix: Mat4) -> Self {
+        let (r0, r1, r2, r3) = (matrix.row(0), matrix.row(1), matrix.row(2), matrix.row(3));
+        // Gribb and Hartmann: -w <= x <= w, -w <= y <= w, 0 <= z <= w.
+        Self {
+            planes: [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2],
+        }
+    }
+
+    /// Whether the axis-aligned box from `min` to `max` may be visible (conservative: a box near
+    /// a corner may be reported visible although it is not).
+    pub fn intersects_box(&self, min: Vec3, max: Vec3) -> bool {
+        self.planes.iter().all(|plane| {
+            // The box corner furthest along the plane's normal.
+            let normal = plane.truncate();
+            let corner = Vec3::select(normal.cmpge(Vec3::ZERO), max, min);
+            normal.dot(corner) + plane.w >= 0.0
+        })
     }
 }
 
@@ -391,6 +420,27 @@ mod tests {
         // The view matrix puts the forward direction on the camera's -z axis.
         let seen = pose.view_matrix().transform_vector3(pose.forward());
         assert!(seen.abs_diff_eq(-Vec3::Z, 1e-6));
+    }
+
+    #[test]
+    fn frustum_keeps_what_is_in_view() {
+        let pose = CameraPose::new(Vec3::new(0.0, 2.0, 10.0), 0.0, 0.0);
+        let lens = Lens {
+            field_of_view_degrees: 45.0,
+            near: 0.1,
+            far: 100.0,
+        };
+        let frustum =
+            Frustum::from_view_projection(lens.projection(16.0 / 9.0) * pose.view_matrix());
+        let unit = Vec3::splat(0.5);
+        let seen = |centre: Vec3| frustum.intersects_box(centre - unit, centre + unit);
+        assert!(seen(Vec3::new(0.0, 2.0, 0.0)), "ahead");
+        assert!(!seen(Vec3::new(0.0, 2.0, 20.0)), "behind");
+        assert!(!seen(Vec3::new(50.0, 2.0, 0.0)), "far to the right");
+        assert!(!seen(Vec3::new(0.0, 2.0, -200.0)), "beyond the far plane");
+        assert!(seen(Vec3::new(0.0, 2.0, 10.0)), "around the camera");
+        // A long box crossing the view is seen although its corners are all outside.
+        assert!(frustum.intersects_box(Vec3::new(-100.0, 1.5, -5.0), Vec3::new(100.0, 2.5, -4.0)));
     }
 
     #[test]

@@ -161,6 +161,11 @@ impl HeadlessRenderer {
         })
     }
 
+    /// The renderer (e.g. for statistics of the last frame).
+    pub fn renderer(&self) -> &Renderer {
+        &self.renderer
+    }
+
     /// Draws `view` and waits for the GPU to finish, without reading the image back (what a
     /// frame costs on screen).
     pub fn draw(&mut self, gpu: &Gpu, view: &FrameView) -> Result<(), RenderError> {

@@ -2,7 +2,12 @@
 
 use super::uniforms::FrameUniforms;
 use super::{DepthBuffer, Renderer};
-use crate::camera::CameraPose;
+use crate::camera::{CameraPose, Frustum};
+use crate::world::mesh::LodView;
+
+/// Largest on-screen error, in pixels, that the terrain's level of detail may introduce: two
+/// pixels of vertical shift, which does not show as the camera moves.
+pub const LOD_ERROR_PIXELS: f32 = 2.0;
 
 /// What a frame shows: where the camera is, its field of view, and the time (which moves the
 /// water).
@@ -36,6 +41,15 @@ impl Renderer {
         let aspect = size.0.max(1) as f32 / size.1.max(1) as f32;
         let view_projection = lens.projection(aspect) * view.pose.view_matrix();
         let water_offset = config.water_offset(view.time_seconds);
+        let lod = |mirrored| LodView {
+            eye: view.pose.position,
+            frustum: Frustum::from_view_projection(view_projection),
+            pixels_per_unit: size.1.max(1) as f32
+                / (2.0 * (view.field_of_view_degrees.to_radians() / 2.0).tan()),
+            max_error_pixels: LOD_ERROR_PIXELS,
+            mirrored,
+        };
+        self.land.prepare(&gpu.queue, [&lod(false), &lod(true)]);
         for (mirrored, buffer) in [false, true].into_iter().zip(&self.frame_buffers) {
             let uniforms = FrameUniforms::new(view_projection, mirrored, water_offset);
             gpu.queue

@@ -122,7 +122,20 @@ impl Renderer {
             &world.sky,
             config,
         )?;
-        let land = LandPass::new(device, queue, &frame_layout, target_format, world, config)?;
+        let multi_draw = gpu
+            .adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
+        let land = LandPass::new(
+            device,
+            queue,
+            &frame_layout,
+            target_format,
+            world,
+            config,
+            multi_draw,
+        )?;
         let water = WaterPass::new(
             device,
             queue,
@@ -147,6 +160,11 @@ impl Renderer {
     /// The colour format this renderer draws into.
     pub fn target_format(&self) -> wgpu::TextureFormat {
         self.target_format
+    }
+
+    /// Triangles of terrain the last frame drew in its direct and mirrored passes.
+    pub fn terrain_triangles(&self) -> [u64; 2] {
+        self.land.triangles_chosen()
     }
 
     /// The scene configuration the world was laid out with.
