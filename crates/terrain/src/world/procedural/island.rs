@@ -13,7 +13,7 @@ const COAST_RADIUS: f64 = 0.70;
 /// Height of the highest peaks (all but the top 0.05% of the map), in world units.
 const PEAK_HEIGHT: f64 = 2.15;
 /// Height the summits round off toward, in world units.
-const MAX_HEIGHT: f64 = 2.3;
+const MAX_HEIGHT: f64 = 2.32;
 
 /// Generates a `size` x `size` island heightmap for `seed`, in grey levels placed with `config`'s
 /// height mapping (the coast is at the level of y = 0). Bit-identical for the same arguments.
@@ -58,7 +58,7 @@ pub fn island_heightmap(
         // slope gently where it falls (masks would make flat tops and cliffs); ridged noise
         // only sharpens their crests.
         let uplift = (massifs.get([qx * 1.1 + 7.3, qz * 1.1 - 4.1]) + 0.1).max(0.0);
-        let mountains = uplift.powf(1.4) * (0.55 + 0.45 * ridge) * smoothstep(0.0, 0.35, inland);
+        let mountains = uplift.powf(2.0) * (0.55 + 0.45 * ridge) * smoothstep(0.0, 0.35, inland);
         (base, mountains)
     });
     // Scale the mountains so that, whatever the seed, the highest peaks (all but the top 0.05% of the map)
@@ -80,7 +80,7 @@ pub fn island_heightmap(
         .map(|(base, mountain)| {
             let height = base + mountain * scale;
             // Peaks round off just below the top of the height range.
-            let height = -smooth_max(-height, -MAX_HEIGHT, 0.3);
+            let height = -smooth_max(-height, -MAX_HEIGHT, 0.12);
             f64::from(config.level_of_height(height as f32)).clamp(lowest, highest) as f32
         })
         .collect();
