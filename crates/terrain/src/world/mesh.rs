@@ -245,10 +245,12 @@ impl TerrainMesh {
             .sum()
     }
 
-    /// The chunks to draw for `view`, each at the coarsest level whose error stays within
+    /// The chunks to draw for `view`, nearest first (so the depth test hides what is behind
+    /// before it is shaded), each at the coarsest level whose error stays within
     /// `view.max_error_pixels` on screen; chunks out of view or under water are left out.
     pub fn select(&self, view: &LodView) -> Vec<DrawRange> {
-        self.chunks
+        let mut chosen: Vec<(f32, DrawRange)> = self
+            .chunks
             .iter()
             .filter(|chunk| chunk.levels.first().is_some_and(|l| l.index_count > 0))
             .filter_map(|chunk| {
@@ -271,13 +273,19 @@ impl TerrainMesh {
                     .rev()
                     .find(|l| l.error <= allowed)
                     .unwrap_or(&chunk.levels[0]);
-                Some(DrawRange {
+                let range = DrawRange {
                     first_index: level.first_index,
                     index_count: level.index_count,
                     base_vertex: level.base_vertex,
-                })
+                };
+                // Order by the distance to the box's centre: the eye may be inside several boxes,
+                // which are all at distance 0 from their surfaces.
+                let order = ((min + max) * 0.5 - view.eye).length_squared();
+                Some((order, range))
             })
-            .collect()
+            .collect();
+        chosen.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chosen.into_iter().map(|(_, range)| range).collect()
     }
 }
 
@@ -652,6 +660,20 @@ mod tests {
                 level.error * v.pixels_per_unit / distance <= 1.0 + 1e-4 || level_of(range) == 0
             );
         }
+        // Nearest first.
+        let centre_distance = |range: &DrawRange| {
+            let chunk = mesh
+                .chunks
+                .iter()
+                .find(|c| c.levels.iter().any(|l| l.base_vertex == range.base_vertex))
+                .expect("chunk");
+            ((chunk.min + chunk.max) * 0.5 - v.eye).length()
+        };
+        assert!(
+            chosen
+                .windows(2)
+                .all(|w| centre_distance(&w[0]) <= centre_distance(&w[1]))
+        );
         // Far above, everything fits in few triangles.
         let high = CameraPose::new(Vec3::new(0.0, 150.0, 0.0), 0.0, -89.0);
         let coarse: u32 = mesh
