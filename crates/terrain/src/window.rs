@@ -64,7 +64,8 @@ pub enum Notice {
 pub struct WindowSummary {
     /// Frames drawn.
     pub frames: u64,
-    /// Wall-clock time the window was open, in seconds.
+    /// Wall-clock time from the start of the first frame to the end of the last, in seconds
+    /// (setting up the window and the GPU is not counted).
     pub seconds: f64,
 }
 
@@ -142,6 +143,8 @@ pub fn run(
         error: None,
         started: Instant::now(),
         last_frame: None,
+        first_frame: None,
+        last_frame_end: None,
         frames: 0,
         mouse_captured: false,
         title_frames: 0,
@@ -155,7 +158,10 @@ pub fn run(
         Some(error) => Err(error),
         None => Ok(WindowSummary {
             frames: app.frames,
-            seconds: app.started.elapsed().as_secs_f64(),
+            seconds: app
+                .first_frame
+                .zip(app.last_frame_end)
+                .map_or(0.0, |(first, last)| (last - first).as_secs_f64()),
         }),
     }
 }
@@ -180,6 +186,8 @@ struct App<'a> {
     error: Option<WindowError>,
     started: Instant,
     last_frame: Option<Instant>,
+    first_frame: Option<Instant>,
+    last_frame_end: Option<Instant>,
     frames: u64,
     mouse_captured: bool,
     title_frames: u32,
@@ -368,6 +376,7 @@ impl App<'_> {
             .map_or(Duration::ZERO, |last| now - last)
             .min(Duration::from_millis(250));
         self.last_frame = Some(now);
+        self.first_frame.get_or_insert(now);
         let limits = self.config.camera_limits();
         let ground = &self.ground;
         self.camera
@@ -411,6 +420,7 @@ impl App<'_> {
             return;
         }
         self.frames += 1;
+        self.last_frame_end = Some(Instant::now());
         self.update_title();
         if self
             .options
