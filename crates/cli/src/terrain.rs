@@ -20,7 +20,7 @@ const MAX_SIDE: u32 = 16_384;
 /// island; the controls are listed in the help text.
 #[derive(Debug, clap::Args)]
 #[command(
-    after_help = "Controls: W/S forward and back, A/D or Left/Right sideways, Up/Down up and down,\n  Shift faster, mouse to look, scroll wheel to zoom, Tab releases or captures the mouse,\n  F12 or P saves a screenshot (its file name is printed), F11 full screen, Esc quits.\n\nExamples:\n  rayterra terrain\n  rayterra terrain --seed 7\n  rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3"
+    after_help = "Controls: W/S forward and back, A/D or Left/Right sideways, Up/Down up and down,\n  Shift faster, mouse to look, scroll wheel to zoom, Tab releases or captures the mouse,\n  F12 or P saves a screenshot (its file name is printed), F11 full screen, Esc quits.\n\nExamples:\n  rayterra terrain\n  rayterra terrain --seed 3\n  rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3"
 )]
 pub struct TerrainArgs {
     /// Load the world from a folder laid out like the course's: heightmap.bmp,
