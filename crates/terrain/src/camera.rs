@@ -526,6 +526,31 @@ mod tests {
         assert!(coarse.velocity().abs_diff_eq(fine.velocity(), 1e-4));
     }
 
+    proptest::proptest! {
+        #[test]
+        fn any_frame_timing_gives_the_same_motion(
+            steps in proptest::collection::vec(0.001f32..0.2, 1..60),
+            yaw in 0.0f32..360.0,
+            pitch in -80.0f32..80.0,
+        ) {
+            let start = CameraPose::new(Vec3::new(1.0, 2.0, 3.0), yaw, pitch);
+            let mut uneven = FlyCamera::new(start, 45.0, MotionSettings::default());
+            let mut single = uneven.clone();
+            for cam in [&mut uneven, &mut single] {
+                cam.set_held(Motion::Forward, true);
+                cam.set_held(Motion::Right, true);
+            }
+            let total: f32 = steps.iter().sum();
+            for &step in &steps {
+                uneven.update(step, &Limits::NONE, |_, _| None);
+            }
+            single.update(total, &Limits::NONE, |_, _| None);
+            let (a, b) = (uneven.pose().position, single.pose().position);
+            proptest::prop_assert!(a.abs_diff_eq(b, 1e-3 * (1.0 + total)), "{a:?} vs {b:?}");
+            proptest::prop_assert!(uneven.velocity().length() <= 3.0 + 1e-4);
+        }
+    }
+
     #[test]
     fn diagonal_keys_do_not_exceed_the_cap_and_boost_raises_it() {
         let mut cam = camera();

@@ -6,7 +6,9 @@ mod common;
 
 use common::{gpu, marker_world, project, render, view_from};
 use image::{Rgba, RgbaImage};
-use terrain::render::Backend;
+use terrain::SceneConfig;
+use terrain::headless::OffscreenTarget;
+use terrain::render::{Backend, Renderer};
 
 const SIZE: (u32, u32) = (160, 96);
 
@@ -137,4 +139,23 @@ fn gl_and_vulkan_draw_the_same_picture() {
         &render(gl, &world, SIZE, &view),
     );
     assert!(d.mean < 0.5 && d.outliers < 0.01, "{d:?}");
+}
+
+#[test]
+fn a_bgra_target_reads_back_as_rgba() {
+    // Window surfaces are often BGRA; screenshots taken in the window read such a target back.
+    let Some(gpu) = gpu(Backend::Vulkan) else {
+        return;
+    };
+    let world = striped_water_world();
+    let view = view_from([-8.0, 1.5, 6.0], 120.0, -12.0);
+    let expected = render(gpu, &world, SIZE, &view);
+    let format = wgpu::TextureFormat::Bgra8Unorm;
+    let mut renderer =
+        Renderer::new(gpu, &world, &SceneConfig::default(), format).expect("renderer");
+    let target = OffscreenTarget::new(gpu, format, SIZE.0, SIZE.1).expect("target");
+    renderer.draw(gpu, target.view(), SIZE, &view);
+    let image = target.read(gpu).expect("read back");
+    let (d, _) = common::difference(&image, &expected);
+    assert!(d.worst <= 1, "{d:?}");
 }

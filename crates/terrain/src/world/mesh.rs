@@ -425,6 +425,8 @@ impl Block {
 
 #[cfg(test)]
 mod tests {
+    use proptest::strategy::Strategy;
+
     use super::*;
     use crate::camera::{CameraPose, Lens};
     use crate::config::SceneConfig;
@@ -598,6 +600,33 @@ mod tests {
         assert!(skirts.iter().flatten().any(|v| v.y < top));
         // Vertical: no area seen from above.
         assert!(plan_area(&skirts) < 1e-6);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_heightmap_gives_a_valid_mesh(
+            (columns, rows, levels) in (2u32..40, 2u32..40).prop_flat_map(|(c, r)| {
+                (proptest::strategy::Just(c), proptest::strategy::Just(r),
+                 proptest::collection::vec(0.0f32..=255.0, (c * r) as usize))
+            })
+        ) {
+            let f = field(columns, rows, levels);
+            let mesh = TerrainMesh::new(&f);
+            for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
+                let end = (level.first_index + level.index_count) as usize;
+                let indices = &mesh.indices[level.first_index as usize..end];
+                proptest::prop_assert!(indices.iter().all(|&i| u32::from(i) < level.vertex_count));
+                for [a, b, c] in mesh.triangles(level, 0..level.index_count) {
+                    proptest::prop_assert!(a.y >= 0.0 && b.y >= 0.0 && c.y >= 0.0, "below the water");
+                }
+                for [a, b, c] in mesh.triangles(level, 0..level.surface_indices) {
+                    proptest::prop_assert!((b - a).cross(c - a).y >= -1e-6, "a surface triangle faces down");
+                }
+            }
+            // The full-resolution surface never covers more than the grid.
+            let extent = f.extent() - f.cell_size();
+            proptest::prop_assert!(plan_area(&mesh.surface_triangles(0)) <= extent.x * extent.y * (1.0 + 1e-4));
+        }
     }
 
     fn view(mesh_mirrored: bool, pose: CameraPose) -> LodView {
