@@ -7,8 +7,7 @@ use wgpu::util::DeviceExt;
 
 use super::RenderError;
 use super::pipeline::{
-    PipelinePair, PipelineSpec, pipelines, sampler_entry, shader_source, texture_entry,
-    uniform_entry,
+    Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipelines, shader_source,
 };
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
@@ -47,14 +46,12 @@ pub struct LandPass {
 impl LandPass {
     /// Builds the mesh of `world`'s heightmap and uploads it with the colour and detail maps.
     pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        frame_layout: &wgpu::BindGroupLayout,
-        target_format: wgpu::TextureFormat,
+        context: &PassContext<'_>,
         world: &World,
         config: &SceneConfig,
         multi_draw: bool,
     ) -> Result<Self, RenderError> {
+        let (device, queue) = (context.device, context.queue);
         let field = Heightfield::new(&world.heightmap, config);
         let mesh = TerrainMesh::new(&field);
         let max_buffer = device.limits().max_buffer_size;
@@ -81,62 +78,33 @@ impl LandPass {
             contents: bytemuck::bytes_of(&uniforms),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("land"),
-            entries: &[
-                uniform_entry(0),
-                texture_entry(1, false),
-                texture_entry(2, false),
-                sampler_entry(3),
-                sampler_entry(4),
+        let (colour_view, detail_view) = (
+            colour.create_view(&wgpu::TextureViewDescriptor::default()),
+            detail.create_view(&wgpu::TextureViewDescriptor::default()),
+        );
+        let (layout, bind_group) = bind_group(
+            device,
+            "land",
+            &[
+                Binding::Uniform(&uniform_buffer),
+                Binding::Texture(&colour_view),
+                Binding::Texture(&detail_view),
+                Binding::Sampler(&sampler(device, false)),
+                Binding::Sampler(&sampler(device, true)),
             ],
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("land"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(
-                        &colour.create_view(&wgpu::TextureViewDescriptor::default()),
-                    ),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::TextureView(
-                        &detail.create_view(&wgpu::TextureViewDescriptor::default()),
-                    ),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Sampler(&sampler(device, false)),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: wgpu::BindingResource::Sampler(&sampler(device, true)),
-                },
-            ],
-        });
+        );
         let attributes = wgpu::vertex_attr_array![0 => Float32x3];
         let pipelines = pipelines(
-            device,
+            context,
             &PipelineSpec {
                 label: "land",
                 source: shader_source!("land.wgsl"),
-                bind_group_layouts: &[frame_layout, &layout],
-                vertex_layout: wgpu::VertexBufferLayout {
-                    array_stride: size_of::<[f32; 3]>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attributes,
-                },
+                layout: &layout,
+                vertex_stride: size_of::<[f32; 3]>() as u64,
+                attributes: &attributes,
                 topology: wgpu::PrimitiveTopology::TriangleList,
                 strip_index_format: None,
                 blend: false,
-                target_format,
             },
         );
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {

@@ -113,37 +113,20 @@ impl Renderer {
                 }],
             })
         });
-        let queue = &gpu.queue;
-        let sky = SkyPass::new(
+        let context = pipeline::PassContext {
             device,
-            queue,
-            &frame_layout,
+            queue: &gpu.queue,
+            frame_layout: &frame_layout,
             target_format,
-            &world.sky,
-            config,
-        )?;
+        };
         let multi_draw = gpu
             .adapter
             .get_downlevel_capabilities()
             .flags
             .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
-        let land = LandPass::new(
-            device,
-            queue,
-            &frame_layout,
-            target_format,
-            world,
-            config,
-            multi_draw,
-        )?;
-        let water = WaterPass::new(
-            device,
-            queue,
-            &frame_layout,
-            target_format,
-            &world.water,
-            config,
-        )?;
+        let sky = SkyPass::new(&context, &world.sky, config)?;
+        let land = LandPass::new(&context, world, config, multi_draw)?;
+        let water = WaterPass::new(&context, &world.water, config)?;
         gpu.check()?;
         Ok(Self {
             config: config.clone(),

@@ -18,18 +18,18 @@ pub struct PipelineSpec<'a> {
     pub label: &'a str,
     /// WGSL source with `vs_main` and `fs_main`.
     pub source: &'a str,
-    /// Bind group layouts: group 0 is the frame's, group 1 the thing's own.
-    pub bind_group_layouts: &'a [&'a wgpu::BindGroupLayout],
-    /// The single vertex buffer's layout.
-    pub vertex_layout: wgpu::VertexBufferLayout<'a>,
+    /// Layout of the thing's own bind group (group 1; group 0 is the frame's).
+    pub layout: &'a wgpu::BindGroupLayout,
+    /// Bytes from one vertex to the next in the single vertex buffer.
+    pub vertex_stride: u64,
+    /// The vertex attributes.
+    pub attributes: &'a [wgpu::VertexAttribute],
     /// How vertices make triangles.
     pub topology: wgpu::PrimitiveTopology,
     /// Index format of an indexed strip (its restart index is the format's maximum).
     pub strip_index_format: Option<wgpu::IndexFormat>,
     /// Alpha blending (the water) rather than opaque drawing.
     pub blend: bool,
-    /// Format of the colour target.
-    pub target_format: wgpu::TextureFormat,
 }
 
 /// The direct and mirrored pipelines of one thing.
@@ -53,21 +53,22 @@ impl PipelinePair {
 }
 
 /// Builds both pipelines of `spec`.
-pub fn pipelines(device: &wgpu::Device, spec: &PipelineSpec<'_>) -> PipelinePair {
+pub fn pipelines(context: &PassContext<'_>, spec: &PipelineSpec<'_>) -> PipelinePair {
+    let device = context.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(spec.label),
         source: wgpu::ShaderSource::Wgsl(spec.source.into()),
     });
-    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = spec
-        .bind_group_layouts
-        .iter()
-        .map(|&layout| Some(layout))
-        .collect();
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(spec.label),
-        bind_group_layouts: &layouts,
+        bind_group_layouts: &[Some(context.frame_layout), Some(spec.layout)],
         immediate_size: 0,
     });
+    let vertex_layout = wgpu::VertexBufferLayout {
+        array_stride: spec.vertex_stride,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: spec.attributes,
+    };
     let build = |front_face: wgpu::FrontFace, label: &str| {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
@@ -76,7 +77,7 @@ pub fn pipelines(device: &wgpu::Device, spec: &PipelineSpec<'_>) -> PipelinePair
                 module: &module,
                 entry_point: Some("vs_main"),
                 compilation_options: wgpu::PipelineCompilationOptions::default(),
-                buffers: &[Some(spec.vertex_layout.clone())],
+                buffers: &[Some(vertex_layout.clone())],
             },
             primitive: wgpu::PrimitiveState {
                 topology: spec.topology,
@@ -99,7 +100,7 @@ pub fn pipelines(device: &wgpu::Device, spec: &PipelineSpec<'_>) -> PipelinePair
                 entry_point: Some("fs_main"),
                 compilation_options: wgpu::PipelineCompilationOptions::default(),
                 targets: &[Some(wgpu::ColorTargetState {
-                    format: spec.target_format,
+                    format: context.target_format,
                     blend: Some(if spec.blend {
                         wgpu::BlendState::ALPHA_BLENDING
                     } else {
@@ -118,44 +119,96 @@ pub fn pipelines(device: &wgpu::Device, spec: &PipelineSpec<'_>) -> PipelinePair
     }
 }
 
-/// A bind group layout entry for a uniform buffer at `binding`, seen by both stages.
-pub fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
+/// What a pass needs from the renderer to build its resources.
+pub struct PassContext<'a> {
+    /// The device.
+    pub device: &'a wgpu::Device,
+    /// Its queue, for uploads.
+    pub queue: &'a wgpu::Queue,
+    /// Layout of the frame uniforms (group 0).
+    pub frame_layout: &'a wgpu::BindGroupLayout,
+    /// Format of the colour target.
+    pub target_format: wgpu::TextureFormat,
 }
 
-/// A bind group layout entry for a filterable float texture (2-D, or a 2-D array) at `binding`.
-pub fn texture_entry(binding: u32, array: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: if array {
-                wgpu::TextureViewDimension::D2Array
-            } else {
-                wgpu::TextureViewDimension::D2
+/// A resource bound to a pass's own group (group 1).
+pub enum Binding<'a> {
+    /// A uniform buffer, seen by both stages.
+    Uniform(&'a wgpu::Buffer),
+    /// A filterable 2-D texture seen by the fragment stage.
+    Texture(&'a wgpu::TextureView),
+    /// A filterable 2-D texture array seen by the fragment stage.
+    TextureArray(&'a wgpu::TextureView),
+    /// A filtering sampler seen by the fragment stage.
+    Sampler(&'a wgpu::Sampler),
+}
+
+/// The layout and the bind group of `bindings`, bound at 0, 1, 2... in order.
+pub fn bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    bindings: &[Binding<'_>],
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
+        .iter()
+        .enumerate()
+        .map(|(binding, resource)| {
+            let (visibility, ty) = match resource {
+                Binding::Uniform(_) => (
+                    wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                ),
+                Binding::Texture(_) | Binding::TextureArray(_) => (
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: if matches!(resource, Binding::TextureArray(_)) {
+                            wgpu::TextureViewDimension::D2Array
+                        } else {
+                            wgpu::TextureViewDimension::D2
+                        },
+                        multisampled: false,
+                    },
+                ),
+                Binding::Sampler(_) => (
+                    wgpu::ShaderStages::FRAGMENT,
+                    wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                ),
+            };
+            wgpu::BindGroupLayoutEntry {
+                binding: binding as u32,
+                visibility,
+                ty,
+                count: None,
+            }
+        })
+        .collect();
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &layout_entries,
+    });
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = bindings
+        .iter()
+        .enumerate()
+        .map(|(binding, resource)| wgpu::BindGroupEntry {
+            binding: binding as u32,
+            resource: match resource {
+                Binding::Uniform(buffer) => buffer.as_entire_binding(),
+                Binding::Texture(view) | Binding::TextureArray(view) => {
+                    wgpu::BindingResource::TextureView(view)
+                }
+                Binding::Sampler(sampler) => wgpu::BindingResource::Sampler(sampler),
             },
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-/// A bind group layout entry for a filtering sampler at `binding`.
-pub fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-        count: None,
-    }
+        })
+        .collect();
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout: &layout,
+        entries: &entries,
+    });
+    (layout, group)
 }

@@ -6,7 +6,7 @@ use wgpu::util::DeviceExt;
 
 use super::RenderError;
 use super::pipeline::{
-    PipelinePair, PipelineSpec, pipelines, sampler_entry, shader_source, texture_entry,
+    Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipelines, shader_source,
 };
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
@@ -35,13 +35,11 @@ impl SkyPass {
     /// Uploads `sky` (faces of different sizes are resampled to the front wall's size) and builds
     /// the box of `config`.
     pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        frame_layout: &wgpu::BindGroupLayout,
-        target_format: wgpu::TextureFormat,
+        context: &PassContext<'_>,
         sky: &SkyBox,
         config: &SceneConfig,
     ) -> Result<Self, RenderError> {
+        let device = context.device;
         let faces = sky.faces();
         let (width, height) = faces[0].dimensions();
         let resized: Vec<image::RgbaImage> = faces
@@ -60,46 +58,32 @@ impl SkyPass {
             })
             .collect();
         let layers: Vec<&image::RgbaImage> = resized.iter().collect();
-        let texture = upload(device, queue, "sky faces", &layers)?;
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("sky"),
-            entries: &[texture_entry(0, true), sampler_entry(1)],
-        });
+        let texture = upload(device, context.queue, "sky faces", &layers)?;
         let view = texture.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("sky"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::Sampler(&sampler(device, false)),
-                },
+        let (layout, bind_group) = bind_group(
+            device,
+            "sky",
+            &[
+                Binding::TextureArray(&view),
+                Binding::Sampler(&sampler(device, false)),
             ],
-        });
+        );
         let (vertices, indices) = box_mesh(config);
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Uint32];
         let pipelines = pipelines(
-            device,
+            context,
             &PipelineSpec {
                 label: "sky",
                 source: shader_source!("sky.wgsl"),
-                bind_group_layouts: &[frame_layout, &layout],
-                vertex_layout: wgpu::VertexBufferLayout {
-                    array_stride: size_of::<SkyVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attributes,
-                },
+                layout: &layout,
+                vertex_stride: size_of::<SkyVertex>() as u64,
+                attributes: &attributes,
                 topology: wgpu::PrimitiveTopology::TriangleList,
                 strip_index_format: None,
                 blend: false,
-                target_format,
             },
         );
         Ok(Self {

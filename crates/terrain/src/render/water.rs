@@ -6,8 +6,7 @@ use wgpu::util::DeviceExt;
 
 use super::RenderError;
 use super::pipeline::{
-    PipelinePair, PipelineSpec, pipelines, sampler_entry, shader_source, texture_entry,
-    uniform_entry,
+    Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipelines, shader_source,
 };
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
@@ -39,14 +38,12 @@ pub struct WaterPass {
 impl WaterPass {
     /// Uploads the water texture and builds the plane of `config`.
     pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        frame_layout: &wgpu::BindGroupLayout,
-        target_format: wgpu::TextureFormat,
+        context: &PassContext<'_>,
         texture: &image::RgbaImage,
         config: &SceneConfig,
     ) -> Result<Self, RenderError> {
-        let texture = upload(device, queue, "water texture", &[texture])?;
+        let device = context.device;
+        let texture = upload(device, context.queue, "water texture", &[texture])?;
         let uniforms = WaterUniforms {
             alpha: config.water_alpha,
             padding: [0.0; 3],
@@ -56,46 +53,28 @@ impl WaterPass {
             contents: bytemuck::bytes_of(&uniforms),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("water"),
-            entries: &[uniform_entry(0), texture_entry(1, false), sampler_entry(2)],
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("water"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(
-                        &texture.create_view(&wgpu::TextureViewDescriptor::default()),
-                    ),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: wgpu::BindingResource::Sampler(&sampler(device, true)),
-                },
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let (layout, bind_group) = bind_group(
+            device,
+            "water",
+            &[
+                Binding::Uniform(&uniform_buffer),
+                Binding::Texture(&view),
+                Binding::Sampler(&sampler(device, true)),
             ],
-        });
+        );
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2];
         let pipelines = pipelines(
-            device,
+            context,
             &PipelineSpec {
                 label: "water",
                 source: shader_source!("water.wgsl"),
-                bind_group_layouts: &[frame_layout, &layout],
-                vertex_layout: wgpu::VertexBufferLayout {
-                    array_stride: size_of::<WaterVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attributes,
-                },
+                layout: &layout,
+                vertex_stride: size_of::<WaterVertex>() as u64,
+                attributes: &attributes,
                 topology: wgpu::PrimitiveTopology::TriangleStrip,
                 strip_index_format: None,
                 blend: true,
-                target_format,
             },
         );
         Ok(Self {
