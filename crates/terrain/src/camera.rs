@@ -377,17 +377,6 @@ impl FlyCamera {
         }
         self.pose.position = clamped;
     }
-
-    /// World-to-clip matrix for a target of aspect width / height, with `near` and `far` in
-    /// world units.
-    pub fn view_projection(&self, aspect: f32, near: f32, far: f32) -> Mat4 {
-        let lens = Lens {
-            field_of_view_degrees: self.field_of_view_degrees,
-            near,
-            far,
-        };
-        lens.projection(aspect) * self.pose.view_matrix()
-    }
 }
 
 #[cfg(test)]

@@ -2,7 +2,9 @@
 
 use super::uniforms::FrameUniforms;
 use super::{DepthBuffer, Renderer};
-use crate::camera::{CameraPose, Frustum};
+use glam::Mat4;
+
+use crate::camera::{CameraPose, Frustum, Lens};
 use crate::world::mesh::LodView;
 
 /// Largest on-screen error, in pixels, that the terrain's level of detail may introduce: two
@@ -21,6 +23,19 @@ pub struct FrameView {
     pub time_seconds: f64,
 }
 
+impl FrameView {
+    /// World-to-clip matrix for a target of aspect width / height, with `near` and `far`
+    /// clipping distances in world units.
+    pub fn view_projection(&self, aspect: f32, near: f32, far: f32) -> Mat4 {
+        let lens = Lens {
+            field_of_view_degrees: self.field_of_view_degrees,
+            near,
+            far,
+        };
+        lens.projection(aspect) * self.pose.view_matrix()
+    }
+}
+
 impl Renderer {
     /// Draws `view` into `target` (of this renderer's format and `size` pixels) and submits the
     /// work. Drawing order: sky, mirrored sky, terrain, mirrored terrain, water. GPU errors are
@@ -33,17 +48,13 @@ impl Renderer {
         view: &FrameView,
     ) {
         let config = &self.config;
-        let lens = crate::camera::Lens {
-            field_of_view_degrees: view.field_of_view_degrees,
-            near: config.near,
-            far: config.far,
-        };
         let aspect = size.0.max(1) as f32 / size.1.max(1) as f32;
-        let view_projection = lens.projection(aspect) * view.pose.view_matrix();
+        let view_projection = view.view_projection(aspect, config.near, config.far);
         let water_offset = config.water_offset(view.time_seconds);
+        let frustum = Frustum::from_view_projection(view_projection);
         let lod = |mirrored| LodView {
             eye: view.pose.position,
-            frustum: Frustum::from_view_projection(view_projection),
+            frustum,
             pixels_per_unit: size.1.max(1) as f32
                 / (2.0 * (view.field_of_view_degrees.to_radians() / 2.0).tan()),
             max_error_pixels: LOD_ERROR_PIXELS,

@@ -194,8 +194,11 @@ impl LandPass {
 
     /// Triangles drawn by the direct and mirrored passes of the current frame (skirts included).
     pub fn triangles_chosen(&self) -> [u64; 2] {
-        self.chosen
-            .clone()
-            .map(|ranges| ranges.iter().map(|r| u64::from(r.index_count) / 3).sum())
+        [0, 1].map(|slot| {
+            self.chosen[slot]
+                .iter()
+                .map(|range| u64::from(range.index_count) / 3)
+                .sum()
+        })
     }
 }
