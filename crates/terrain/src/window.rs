@@ -271,22 +271,25 @@ impl App<'_> {
         })
     }
 
+    /// Turns mouse look on (`captured`) or off. Grabbing and hiding the cursor is best effort:
+    /// where the windowing system refuses, the mouse still turns the view.
     fn set_mouse_captured(&mut self, captured: bool) {
-        let Some(running) = &self.running else { return };
+        let Some(running) = &self.running else {
+            return;
+        };
         let window = &running.window;
-        let grabbed = if captured {
-            window
+        let grabbed = captured
+            && window
                 .set_cursor_grab(CursorGrabMode::Locked)
                 .or_else(|_| window.set_cursor_grab(CursorGrabMode::Confined))
-                .is_ok()
-        } else {
+                .is_ok();
+        if !captured {
             let _ = window.set_cursor_grab(CursorGrabMode::None);
-            false
-        };
+        }
         window.set_cursor_visible(!grabbed);
-        if grabbed != self.mouse_captured {
-            self.mouse_captured = grabbed;
-            (self.notice)(Notice::MouseCaptured(grabbed));
+        if captured != self.mouse_captured {
+            self.mouse_captured = captured;
+            (self.notice)(Notice::MouseCaptured(captured));
         }
     }
 
