@@ -147,6 +147,7 @@ pub fn run(
         last_frame_end: None,
         frames: 0,
         mouse_captured: false,
+        capture_on_focus: false,
         title_frames: 0,
         title_since: Instant::now(),
         screenshots_taken: 0,
@@ -190,6 +191,8 @@ struct App<'a> {
     last_frame_end: Option<Instant>,
     frames: u64,
     mouse_captured: bool,
+    /// Whether to capture the mouse when the window gets the focus back.
+    capture_on_focus: bool,
     title_frames: u32,
     title_since: Instant,
     screenshots_taken: u32,
@@ -495,9 +498,12 @@ impl ApplicationHandler for App<'_> {
                 }
             }
             WindowEvent::Focused(false) => {
+                // Leaving the window frees the mouse; coming back captures it again if it was.
+                self.capture_on_focus = self.mouse_captured;
                 self.camera.release_all();
                 self.set_mouse_captured(false);
             }
+            WindowEvent::Focused(true) if self.capture_on_focus => self.set_mouse_captured(true),
             WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
             WindowEvent::MouseInput {
                 state: ElementState::Pressed,
