@@ -1,2 +1,21 @@
 //! The terrain engine: a height-mapped island standing in a translucent, reflecting sea under a
 //! sky box, drawn with wgpu. World convention: **y-up**, the water is the plane y = 0.
+//!
+//! - [`world`]: the data to draw (heightmap, textures, sky), loaded or generated. No GPU.
+//! - [`camera`]: the fly camera, a pure state machine fed with input and time.
+//! - [`config`]: the scene's numbers (the course's by default).
+//! - [`render`]: the wgpu renderer, drawing into any texture.
+//! - [`headless`]: one frame off-screen, read back as an image.
+//! - [`window`]: the interactive window (winit), using the same renderer.
+//!
+//! The library never prints, exits or parses command lines: it returns values and typed errors.
+
+pub mod camera;
+pub mod config;
+pub mod headless;
+pub mod output;
+pub mod render;
+pub mod window;
+pub mod world;
+
+pub use config::SceneConfig;

@@ -1,0 +1,204 @@
+//! The terrain and its mirror image: one static mesh (cut at the waterline when it is built) in
+//! chunks and levels of detail. Each frame the chunks in view are chosen at the coarsest level
+//! whose error stays under a pixel, and each pass draws them with one multi-draw-indirect call.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::RenderError;
+use super::pipeline::{
+    Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipelines, shader_source,
+};
+use super::texture::{sampler, upload};
+use crate::config::SceneConfig;
+use crate::world::mesh::{DrawRange, LodView};
+use crate::world::{Heightfield, TerrainMesh, World};
+
+/// Bytes of one indirect draw's arguments.
+const INDIRECT_ARGS_SIZE: u64 = size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
+
+/// The WGSL struct `Land`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct LandUniforms {
+    inverse_extent: [f32; 2],
+    detail_repeat: f32,
+    padding: f32,
+}
+
+/// The terrain's GPU resources.
+#[derive(Debug)]
+pub struct LandPass {
+    pipelines: PipelinePair,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    /// The chunk table (its positions and indices live on the GPU only).
+    chunks: TerrainMesh,
+    /// Draw arguments of the direct pass, then of the mirrored pass (one slot per chunk each).
+    indirect: wgpu::Buffer,
+    /// Whether the GPU can draw from `indirect` (otherwise each chunk is its own draw call).
+    multi_draw: bool,
+    /// The chunks chosen for the direct (0) and mirrored (1) pass of the current frame.
+    chosen: [Vec<DrawRange>; 2],
+}
+
+impl LandPass {
+    /// Builds the mesh of `world`'s heightmap and uploads it with the colour and detail maps.
+    pub fn new(
+        context: &PassContext<'_>,
+        world: &World,
+        config: &SceneConfig,
+        multi_draw: bool,
+    ) -> Result<Self, RenderError> {
+        let (device, queue) = (context.device, context.queue);
+        let field = Heightfield::new(&world.heightmap, config);
+        let mesh = TerrainMesh::new(&field);
+        let max_buffer = device.limits().max_buffer_size;
+        let vertex_bytes = (mesh.positions.len() * size_of::<[f32; 3]>()) as u64;
+        let index_bytes = (mesh.indices.len() * size_of::<u16>()) as u64;
+        if vertex_bytes.max(index_bytes) > max_buffer {
+            return Err(RenderError::MeshSize {
+                columns: field.columns(),
+                rows: field.rows(),
+                bytes: vertex_bytes.max(index_bytes),
+                max: max_buffer,
+            });
+        }
+        let colour = upload(device, queue, "colour map", &[&world.colour_map])?;
+        let detail = upload(device, queue, "detail map", &[&world.detail_map])?;
+        let extent = field.extent();
+        let uniforms = LandUniforms {
+            inverse_extent: [1.0 / extent.x, 1.0 / extent.y],
+            detail_repeat: config.detail_repeat,
+            padding: 0.0,
+        };
+        let uniform_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("land uniforms"),
+            contents: bytemuck::bytes_of(&uniforms),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let (colour_view, detail_view) = (
+            colour.create_view(&wgpu::TextureViewDescriptor::default()),
+            detail.create_view(&wgpu::TextureViewDescriptor::default()),
+        );
+        let (layout, bind_group) = bind_group(
+            device,
+            "land",
+            &[
+                Binding::Uniform(&uniform_buffer),
+                Binding::Texture(&colour_view),
+                Binding::Texture(&detail_view),
+                Binding::Sampler(&sampler(device, false)),
+                Binding::Sampler(&sampler(device, true)),
+            ],
+        );
+        let attributes = wgpu::vertex_attr_array![0 => Float32x3];
+        let pipelines = pipelines(
+            context,
+            &PipelineSpec {
+                label: "land",
+                source: shader_source!("land.wgsl"),
+                layout: &layout,
+                vertex_stride: size_of::<[f32; 3]>() as u64,
+                attributes: &attributes,
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                strip_index_format: None,
+                blend: false,
+            },
+        );
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("land vertices"),
+            contents: bytemuck::cast_slice(&mesh.positions),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("land indices"),
+            contents: bytemuck::cast_slice(&mesh.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        let indirect = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("land draws"),
+            size: 2 * INDIRECT_ARGS_SIZE * mesh.chunks.len().max(1) as u64,
+            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Self {
+            pipelines,
+            vertices,
+            indices,
+            bind_group,
+            // Keep the chunk table only: the geometry now lives on the GPU.
+            chunks: TerrainMesh {
+                positions: Vec::new(),
+                indices: Vec::new(),
+                chunks: mesh.chunks,
+            },
+            indirect,
+            multi_draw,
+            chosen: [Vec::new(), Vec::new()],
+        })
+    }
+
+    /// Chooses the chunks and levels of the direct and mirrored passes and uploads their draws.
+    pub fn prepare(&mut self, queue: &wgpu::Queue, views: [&LodView; 2]) {
+        for (slot, view) in views.into_iter().enumerate() {
+            self.chosen[slot] = self.chunks.select(view);
+            let args: Vec<wgpu::util::DrawIndexedIndirectArgs> = self.chosen[slot]
+                .iter()
+                .map(|range| wgpu::util::DrawIndexedIndirectArgs {
+                    index_count: range.index_count,
+                    instance_count: 1,
+                    first_index: range.first_index,
+                    base_vertex: range.base_vertex as i32,
+                    first_instance: 0,
+                })
+                .collect();
+            if self.multi_draw && !args.is_empty() {
+                let bytes: Vec<u8> = args.iter().flat_map(|a| a.as_bytes().to_vec()).collect();
+                queue.write_buffer(&self.indirect, self.slot_offset(slot), &bytes);
+            }
+        }
+    }
+
+    fn slot_offset(&self, slot: usize) -> u64 {
+        slot as u64 * INDIRECT_ARGS_SIZE * self.chunks.chunks.len() as u64
+    }
+
+    /// Draws the terrain, or its mirror image, with the chunks chosen by [`Self::prepare`]: one
+    /// multi-draw call (or one call per chunk where the GPU cannot draw indirectly).
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &wgpu::BindGroup, mirrored: bool) {
+        let slot = usize::from(mirrored);
+        let chosen = &self.chosen[slot];
+        if chosen.is_empty() {
+            return;
+        }
+        pass.set_pipeline(self.pipelines.get(mirrored));
+        pass.set_bind_group(0, frame, &[]);
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
+        if self.multi_draw {
+            pass.multi_draw_indexed_indirect(
+                &self.indirect,
+                self.slot_offset(slot),
+                chosen.len() as u32,
+            );
+        } else {
+            for range in chosen {
+                let indices = range.first_index..range.first_index + range.index_count;
+                pass.draw_indexed(indices, range.base_vertex as i32, 0..1);
+            }
+        }
+    }
+
+    /// Triangles drawn by the direct and mirrored passes of the current frame (skirts included).
+    pub fn triangles_chosen(&self) -> [u64; 2] {
+        [0, 1].map(|slot| {
+            self.chosen[slot]
+                .iter()
+                .map(|range| u64::from(range.index_count) / 3)
+                .sum()
+        })
+    }
+}

@@ -1,0 +1,161 @@
+//! The sky box and its mirror image: five faces (four walls and the top) from one texture array,
+//! sampled clamp-to-edge so no seams show.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use super::RenderError;
+use super::pipeline::{
+    Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipelines, shader_source,
+};
+use super::texture::{sampler, upload};
+use crate::config::SceneConfig;
+use crate::world::{SkyBox, SkyFace};
+
+/// A corner of a sky face.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+struct SkyVertex {
+    position: [f32; 3],
+    uv: [f32; 2],
+    layer: u32,
+}
+
+/// The sky box's GPU resources.
+#[derive(Debug)]
+pub struct SkyPass {
+    pipelines: PipelinePair,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    bind_group: wgpu::BindGroup,
+}
+
+impl SkyPass {
+    /// Uploads `sky` (faces of different sizes are resampled to the front wall's size) and builds
+    /// the box of `config`.
+    pub fn new(
+        context: &PassContext<'_>,
+        sky: &SkyBox,
+        config: &SceneConfig,
+    ) -> Result<Self, RenderError> {
+        let device = context.device;
+        let faces = sky.faces();
+        let (width, height) = faces[0].dimensions();
+        let resized: Vec<image::RgbaImage> = faces
+            .iter()
+            .map(|face| {
+                if face.dimensions() == (width, height) {
+                    (*face).clone()
+                } else {
+                    image::imageops::resize(
+                        *face,
+                        width,
+                        height,
+                        image::imageops::FilterType::Triangle,
+                    )
+                }
+            })
+            .collect();
+        let layers: Vec<&image::RgbaImage> = resized.iter().collect();
+        let texture = upload(device, context.queue, "sky faces", &layers)?;
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let (layout, bind_group) = bind_group(
+            device,
+            "sky",
+            &[
+                Binding::TextureArray(&view),
+                Binding::Sampler(&sampler(device, false)),
+            ],
+        );
+        let (vertices, indices) = box_mesh(config);
+        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Uint32];
+        let pipelines = pipelines(
+            context,
+            &PipelineSpec {
+                label: "sky",
+                source: shader_source!("sky.wgsl"),
+                layout: &layout,
+                vertex_stride: size_of::<SkyVertex>() as u64,
+                attributes: &attributes,
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                strip_index_format: None,
+                blend: false,
+            },
+        );
+        Ok(Self {
+            pipelines,
+            vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sky vertices"),
+                contents: bytemuck::cast_slice(&vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            }),
+            indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sky indices"),
+                contents: bytemuck::cast_slice(&indices),
+                usage: wgpu::BufferUsages::INDEX,
+            }),
+            index_count: indices.len() as u32,
+            bind_group,
+        })
+    }
+
+    /// Draws the sky box, or its mirror image, in one draw call.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &wgpu::BindGroup, mirrored: bool) {
+        pass.set_pipeline(self.pipelines.get(mirrored));
+        pass.set_bind_group(0, frame, &[]);
+        pass.set_bind_group(1, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
+        pass.draw_indexed(0..self.index_count, 0, 0..1);
+    }
+}
+
+/// The five faces as quads, counter-clockwise seen from inside the box.
+fn box_mesh(config: &SceneConfig) -> (Vec<SkyVertex>, Vec<u16>) {
+    let size = config.sky_box_size.as_dvec3();
+    let mut vertices = Vec::with_capacity(20);
+    let mut indices = Vec::with_capacity(30);
+    for (layer, face) in SkyFace::ALL.into_iter().enumerate() {
+        let first = vertices.len() as u16;
+        // Corners in image order: top left, top right, bottom right, bottom left.
+        for (u, v) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            vertices.push(SkyVertex {
+                position: face.point(u, v, size).as_vec3().to_array(),
+                uv: [u as f32, v as f32],
+                layer: layer as u32,
+            });
+        }
+        // Seen from inside, a face's image reads left to right and top to bottom, so
+        // (top left, bottom left, bottom right) turns counter-clockwise.
+        indices.extend([0, 3, 2, 0, 2, 1].map(|i| first + i));
+    }
+    (vertices, indices)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    #[test]
+    fn faces_turn_toward_the_inside() {
+        let (vertices, indices) = box_mesh(&SceneConfig::default());
+        assert_eq!(vertices.len(), 20);
+        // A point inside the box sees every triangle's front: its normal points at it.
+        let inside = Vec3::new(0.0, 2.5, 10.0);
+        for triangle in indices.chunks(3) {
+            let p = |i: u16| Vec3::from_array(vertices[i as usize].position);
+            let (a, b, c) = (p(triangle[0]), p(triangle[1]), p(triangle[2]));
+            let normal = (b - a).cross(c - a);
+            assert!(
+                normal.dot(inside - a) > 0.0,
+                "triangle {triangle:?} faces outward"
+            );
+        }
+    }
+}

@@ -1,0 +1,559 @@
+//! The interactive window: a winit event loop feeding the fly camera and drawing with the same
+//! renderer as the off-screen path.
+//!
+//! Controls: W/S forward and back along the view, A/D and Left/Right sideways, Up/Down in world
+//! y, Shift to go faster, mouse to look, scroll wheel to zoom, Tab to release or capture the
+//! mouse (a click captures it), F12 or P to save a screenshot, F11 for full screen, Esc to quit.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{
+    DeviceEvent, DeviceId, ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent,
+};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{CursorGrabMode, Fullscreen, Window, WindowId};
+
+use crate::camera::{CameraPose, FlyCamera, Motion, MotionSettings};
+use crate::config::SceneConfig;
+use crate::headless::OffscreenTarget;
+use crate::output::{SaveError, save_image};
+use crate::render::{Backend, FrameView, Gpu, GpuError, RenderError, Renderer};
+use crate::world::{Heightfield, World};
+
+/// How to open the window.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowOptions {
+    /// Graphics backend.
+    pub backend: Backend,
+    /// Initial inner size in physical pixels.
+    pub size: (u32, u32),
+    /// Where the camera starts.
+    pub pose: CameraPose,
+    /// Initial vertical field of view in degrees.
+    pub field_of_view_degrees: f32,
+    /// Scene time at start, in seconds (the water's clock then runs in real time).
+    pub start_time_seconds: f64,
+    /// Quit after drawing this many frames (`None`: run until the user quits).
+    pub max_frames: Option<u64>,
+    /// Wait for the display's refresh between frames.
+    pub vsync: bool,
+    /// Folder where screenshots are saved.
+    pub screenshot_dir: PathBuf,
+}
+
+/// Something the user should hear about while the window runs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Notice {
+    /// The GPU is ready; the adapter's description.
+    Adapter(String),
+    /// A screenshot was saved to this file.
+    ScreenshotSaved(PathBuf),
+    /// A screenshot could not be saved; why.
+    ScreenshotFailed(String),
+    /// The mouse was captured for looking around (`true`) or released (`false`).
+    MouseCaptured(bool),
+}
+
+/// How a window session went.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WindowSummary {
+    /// Frames drawn.
+    pub frames: u64,
+    /// Wall-clock time from the start of the first frame to the end of the last, in seconds
+    /// (setting up the window and the GPU is not counted).
+    pub seconds: f64,
+}
+
+/// Why the window could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum WindowError {
+    /// There is no display to open a window on.
+    #[error("no display to open a window on ({0})")]
+    NoDisplay(String),
+    /// The windowing system failed.
+    #[error("the window system failed: {0}")]
+    System(String),
+    /// The GPU could not present to the window.
+    #[error("the GPU cannot draw into the window: {0}")]
+    Surface(String),
+    /// Setting up or drawing with the GPU failed.
+    #[error(transparent)]
+    Render(#[from] RenderError),
+}
+
+impl From<GpuError> for WindowError {
+    fn from(error: GpuError) -> Self {
+        WindowError::Render(error.into())
+    }
+}
+
+/// Whether a display server seems to be available (on Linux and BSD: `DISPLAY`,
+/// `WAYLAND_DISPLAY` or `WAYLAND_SOCKET` is set; elsewhere always).
+pub fn display_available() -> bool {
+    if cfg!(all(
+        unix,
+        not(target_os = "macos"),
+        not(target_os = "ios"),
+        not(target_os = "android")
+    )) {
+        ["DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"]
+            .iter()
+            .any(|name| std::env::var_os(name).is_some_and(|value| !value.is_empty()))
+    } else {
+        true
+    }
+}
+
+/// Opens a window on `world` and runs until the user quits (or `max_frames` frames are drawn).
+/// `notice` hears about the adapter, screenshots and the mouse.
+pub fn run(
+    world: &World,
+    config: &SceneConfig,
+    options: WindowOptions,
+    notice: &mut dyn FnMut(Notice),
+) -> Result<WindowSummary, WindowError> {
+    if !display_available() {
+        return Err(WindowError::NoDisplay(
+            "neither DISPLAY nor WAYLAND_DISPLAY is set".into(),
+        ));
+    }
+    let event_loop = EventLoop::new().map_err(|error| match error {
+        winit::error::EventLoopError::Os(os) => WindowError::NoDisplay(os.to_string()),
+        other => WindowError::System(other.to_string()),
+    })?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let camera = FlyCamera::new(
+        options.pose,
+        options.field_of_view_degrees,
+        MotionSettings::default(),
+    );
+    let mut app = App {
+        world,
+        config,
+        ground: Heightfield::new(&world.heightmap, config),
+        options,
+        notice,
+        camera,
+        running: None,
+        error: None,
+        started: Instant::now(),
+        last_frame: None,
+        first_frame: None,
+        last_frame_end: None,
+        frames: 0,
+        mouse_captured: false,
+        capture_on_focus: false,
+        title_frames: 0,
+        title_since: Instant::now(),
+        screenshots_taken: 0,
+    };
+    event_loop
+        .run_app(&mut app)
+        .map_err(|error| WindowError::System(error.to_string()))?;
+    match app.error {
+        Some(error) => Err(error),
+        None => Ok(WindowSummary {
+            frames: app.frames,
+            seconds: app
+                .first_frame
+                .zip(app.last_frame_end)
+                .map_or(0.0, |(first, last)| (last - first).as_secs_f64()),
+        }),
+    }
+}
+
+/// What exists once the window is open.
+struct Running {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    surface_config: wgpu::SurfaceConfiguration,
+    gpu: Gpu,
+    renderer: Renderer,
+}
+
+struct App<'a> {
+    world: &'a World,
+    config: &'a SceneConfig,
+    ground: Heightfield,
+    options: WindowOptions,
+    notice: &'a mut dyn FnMut(Notice),
+    camera: FlyCamera,
+    running: Option<Running>,
+    error: Option<WindowError>,
+    started: Instant,
+    last_frame: Option<Instant>,
+    first_frame: Option<Instant>,
+    last_frame_end: Option<Instant>,
+    frames: u64,
+    mouse_captured: bool,
+    /// Whether to capture the mouse when the window gets the focus back.
+    capture_on_focus: bool,
+    title_frames: u32,
+    title_since: Instant,
+    screenshots_taken: u32,
+}
+
+const TITLE: &str = "rayterra terrain";
+
+impl App<'_> {
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: WindowError) {
+        self.error.get_or_insert(error);
+        event_loop.exit();
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<Running, WindowError> {
+        let (width, height) = self.options.size;
+        let attributes = Window::default_attributes()
+            .with_title(TITLE)
+            .with_inner_size(PhysicalSize::new(width, height));
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|error| WindowError::System(error.to_string()))?,
+        );
+        let instance = Gpu::instance(
+            self.options.backend,
+            Some(Box::new(event_loop.owned_display_handle())),
+        );
+        let surface = instance
+            .create_surface(Arc::clone(&window))
+            .map_err(|error| WindowError::Surface(error.to_string()))?;
+        let gpu = Gpu::open(instance, self.options.backend, Some(&surface))?;
+        (self.notice)(Notice::Adapter(gpu.describe()));
+        let capabilities = surface.get_capabilities(&gpu.adapter);
+        // Draw into a non-sRGB view, like the off-screen path and the course's OpenGL: the
+        // textures' stored values go to the screen as they are.
+        let format = capabilities
+            .formats
+            .iter()
+            .copied()
+            .find(|format| !format.is_srgb())
+            .or(capabilities.formats.first().copied())
+            .ok_or_else(|| {
+                WindowError::Surface(format!("{} cannot present to this window", gpu.describe()))
+            })?;
+        let view_format = format.remove_srgb_suffix();
+        let present_mode = if self.options.vsync {
+            wgpu::PresentMode::AutoVsync
+        } else {
+            wgpu::PresentMode::AutoNoVsync
+        };
+        let size = window.inner_size();
+        let surface_config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            color_space: wgpu::SurfaceColorSpace::default(),
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: capabilities
+                .alpha_modes
+                .first()
+                .copied()
+                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: if view_format == format {
+                Vec::new()
+            } else {
+                vec![view_format]
+            },
+        };
+        surface.configure(&gpu.device, &surface_config);
+        let renderer = Renderer::new(&gpu, self.world, self.config, view_format)?;
+        Ok(Running {
+            window,
+            surface,
+            surface_config,
+            gpu,
+            renderer,
+        })
+    }
+
+    /// Turns mouse look on (`captured`) or off. Grabbing and hiding the cursor is best effort:
+    /// where the windowing system refuses, the mouse still turns the view.
+    fn set_mouse_captured(&mut self, captured: bool) {
+        let Some(running) = &self.running else {
+            return;
+        };
+        let window = &running.window;
+        let grabbed = captured
+            && window
+                .set_cursor_grab(CursorGrabMode::Locked)
+                .or_else(|_| window.set_cursor_grab(CursorGrabMode::Confined))
+                .is_ok();
+        if !captured {
+            let _ = window.set_cursor_grab(CursorGrabMode::None);
+        }
+        window.set_cursor_visible(!grabbed);
+        if captured != self.mouse_captured {
+            self.mouse_captured = captured;
+            (self.notice)(Notice::MouseCaptured(captured));
+        }
+    }
+
+    fn key(&mut self, event_loop: &ActiveEventLoop, event: &KeyEvent) {
+        let PhysicalKey::Code(code) = event.physical_key else {
+            return;
+        };
+        let pressed = event.state == ElementState::Pressed;
+        let motion = match code {
+            KeyCode::KeyW => Some(Motion::Forward),
+            KeyCode::KeyS => Some(Motion::Back),
+            KeyCode::KeyA | KeyCode::ArrowLeft => Some(Motion::Left),
+            KeyCode::KeyD | KeyCode::ArrowRight => Some(Motion::Right),
+            KeyCode::ArrowUp => Some(Motion::Up),
+            KeyCode::ArrowDown => Some(Motion::Down),
+            _ => None,
+        };
+        if let Some(motion) = motion {
+            self.camera.set_held(motion, pressed);
+            return;
+        }
+        match code {
+            KeyCode::ShiftLeft | KeyCode::ShiftRight => self.camera.set_boost(pressed),
+            _ if !pressed || event.repeat => {}
+            KeyCode::Escape => event_loop.exit(),
+            KeyCode::Tab => self.set_mouse_captured(!self.mouse_captured),
+            KeyCode::F12 | KeyCode::KeyP => self.screenshot(),
+            KeyCode::F11 => {
+                if let Some(running) = &self.running {
+                    let full = running.window.fullscreen().is_some();
+                    running
+                        .window
+                        .set_fullscreen((!full).then_some(Fullscreen::Borderless(None)));
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn view(&self) -> FrameView {
+        FrameView {
+            pose: self.camera.pose(),
+            field_of_view_degrees: self.camera.field_of_view_degrees(),
+            time_seconds: self.options.start_time_seconds + self.started.elapsed().as_secs_f64(),
+        }
+    }
+
+    fn screenshot(&mut self) {
+        let view = self.view();
+        let Some(running) = &mut self.running else {
+            return;
+        };
+        let size = (running.surface_config.width, running.surface_config.height);
+        let result = (|| -> Result<PathBuf, String> {
+            let target = OffscreenTarget::new(
+                &running.gpu,
+                running.renderer.target_format(),
+                size.0,
+                size.1,
+            )
+            .map_err(|error| error.to_string())?;
+            running
+                .renderer
+                .draw(&running.gpu, target.view(), size, &view);
+            let image = target
+                .read(&running.gpu)
+                .map_err(|error| error.to_string())?;
+            let path = free_screenshot_path(&self.options.screenshot_dir, self.screenshots_taken);
+            save_image(&image.into(), &path, image::ImageFormat::Png)
+                .map_err(|error: SaveError| error.to_string())?;
+            Ok(path)
+        })();
+        match result {
+            Ok(path) => {
+                self.screenshots_taken += 1;
+                (self.notice)(Notice::ScreenshotSaved(path));
+            }
+            Err(message) => (self.notice)(Notice::ScreenshotFailed(message)),
+        }
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) {
+        let now = Instant::now();
+        // Long stalls (a window drag, a breakpoint) do not turn into a leap of the camera.
+        let step = self
+            .last_frame
+            .map_or(Duration::ZERO, |last| now - last)
+            .min(Duration::from_millis(250));
+        self.last_frame = Some(now);
+        self.first_frame.get_or_insert(now);
+        let limits = self.config.camera_limits();
+        let ground = &self.ground;
+        self.camera
+            .update(step.as_secs_f32(), &limits, |x, z| ground.height_at(x, z));
+        let view = self.view();
+        let Some(running) = &mut self.running else {
+            return;
+        };
+        let frame = match running.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(frame)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => frame,
+            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => return,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                running
+                    .surface
+                    .configure(&running.gpu.device, &running.surface_config);
+                return;
+            }
+            wgpu::CurrentSurfaceTexture::Validation => {
+                let error = running
+                    .gpu
+                    .check()
+                    .err()
+                    .unwrap_or_else(|| GpuError::Reported {
+                        messages: vec!["the window's surface could not be acquired".into()],
+                    });
+                self.fail(event_loop, error.into());
+                return;
+            }
+        };
+        let target = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(running.renderer.target_format()),
+            ..Default::default()
+        });
+        let size = (running.surface_config.width, running.surface_config.height);
+        running.renderer.draw(&running.gpu, &target, size, &view);
+        running.window.pre_present_notify();
+        running.gpu.queue.present(frame);
+        if let Err(error) = running.gpu.check() {
+            self.fail(event_loop, error.into());
+            return;
+        }
+        self.frames += 1;
+        self.last_frame_end = Some(Instant::now());
+        self.update_title();
+        if self
+            .options
+            .max_frames
+            .is_some_and(|max| self.frames >= max)
+        {
+            event_loop.exit();
+        }
+    }
+
+    fn update_title(&mut self) {
+        self.title_frames += 1;
+        let elapsed = self.title_since.elapsed();
+        if elapsed < Duration::from_millis(500) {
+            return;
+        }
+        if let Some(running) = &self.running {
+            let milliseconds = elapsed.as_secs_f64() * 1000.0 / f64::from(self.title_frames);
+            let hint = if self.mouse_captured {
+                "Tab releases the mouse"
+            } else {
+                "click or Tab to look around"
+            };
+            running.window.set_title(&format!(
+                "{TITLE} - {milliseconds:.1} ms/frame ({:.0} fps) - {hint}",
+                1000.0 / milliseconds
+            ));
+        }
+        self.title_frames = 0;
+        self.title_since = Instant::now();
+    }
+}
+
+/// `rayterra-terrain-NNN.png` in `dir`, the first number from `from` that names no file yet.
+fn free_screenshot_path(dir: &Path, from: u32) -> PathBuf {
+    (from + 1..)
+        .map(|n| dir.join(format!("rayterra-terrain-{n:03}.png")))
+        .find(|path| !path.exists())
+        .unwrap_or_else(|| dir.join("rayterra-terrain.png"))
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.running.is_some() {
+            return;
+        }
+        match self.open(event_loop) {
+            Ok(running) => {
+                self.running = Some(running);
+                self.set_mouse_captured(true);
+            }
+            Err(error) => self.fail(event_loop, error),
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(running) = &mut self.running
+                    && size.width > 0
+                    && size.height > 0
+                {
+                    running.surface_config.width = size.width;
+                    running.surface_config.height = size.height;
+                    running
+                        .surface
+                        .configure(&running.gpu.device, &running.surface_config);
+                }
+            }
+            WindowEvent::Focused(false) => {
+                // Leaving the window frees the mouse; coming back captures it again if it was.
+                self.capture_on_focus = self.mouse_captured;
+                self.camera.release_all();
+                self.set_mouse_captured(false);
+            }
+            WindowEvent::Focused(true) if self.capture_on_focus => self.set_mouse_captured(true),
+            WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
+            WindowEvent::MouseInput {
+                state: ElementState::Pressed,
+                button: MouseButton::Left,
+                ..
+            } if !self.mouse_captured => self.set_mouse_captured(true),
+            WindowEvent::MouseWheel { delta, .. } => {
+                let lines = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(position) => position.y as f32 / 40.0,
+                };
+                self.camera.zoom(lines);
+            }
+            WindowEvent::RedrawRequested => self.redraw(event_loop),
+            _ => {}
+        }
+    }
+
+    fn device_event(&mut self, _event_loop: &ActiveEventLoop, _id: DeviceId, event: DeviceEvent) {
+        if let DeviceEvent::MouseMotion { delta } = event
+            && self.mouse_captured
+        {
+            self.camera.turn(delta.0, delta.1);
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(running) = &self.running {
+            running.window.request_redraw();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn screenshot_names_skip_existing_files() {
+        let dir = std::env::temp_dir().join(format!("rayterra-shots-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        std::fs::write(dir.join("rayterra-terrain-001.png"), b"taken").expect("write");
+        assert_eq!(
+            free_screenshot_path(&dir, 0),
+            dir.join("rayterra-terrain-002.png")
+        );
+        assert_eq!(
+            free_screenshot_path(&dir, 4),
+            dir.join("rayterra-terrain-005.png")
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

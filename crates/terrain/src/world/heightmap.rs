@@ -1,0 +1,223 @@
+//! Heightmaps: a grid of grey levels read from any greyscale image (8- or 16-bit, any size).
+
+use std::path::Path;
+
+use image::DynamicImage;
+
+use super::{WorldError, read_image};
+
+/// Largest heightmap side accepted, in samples. Beyond this the mesh no longer fits the buffers of
+/// common GPUs (and the course maps are 256 wide); it keeps absurd inputs from exhausting memory.
+pub const MAX_HEIGHTMAP_SIDE: u32 = 8193;
+
+/// Why a grid of samples is not a usable heightmap.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum HeightmapError {
+    /// Fewer than 2x2 samples: there is no cell to draw.
+    #[error("a heightmap needs at least 2x2 samples, this one is {columns}x{rows}")]
+    TooSmall {
+        /// Samples per row.
+        columns: u32,
+        /// Rows.
+        rows: u32,
+    },
+    /// More than [`MAX_HEIGHTMAP_SIDE`] samples along a side.
+    #[error(
+        "a heightmap may have at most {MAX_HEIGHTMAP_SIDE} samples per side, this one is {columns}x{rows}"
+    )]
+    TooLarge {
+        /// Samples per row.
+        columns: u32,
+        /// Rows.
+        rows: u32,
+    },
+    /// The sample vector's length is not `columns * rows`.
+    #[error("{len} samples given for a {columns}x{rows} heightmap")]
+    SampleCount {
+        /// Samples per row.
+        columns: u32,
+        /// Rows.
+        rows: u32,
+        /// Samples given.
+        len: usize,
+    },
+    /// A sample is NaN or infinite.
+    #[error("the sample at row {row}, column {column} is not a finite number")]
+    NotFinite {
+        /// Row of the bad sample.
+        row: u32,
+        /// Column of the bad sample.
+        column: u32,
+    },
+}
+
+/// A grid of heights as grey levels on the 8-bit scale: 0.0 is black, 255.0 white. 16-bit images
+/// keep their precision as fractional levels. Row 0 is the image's top row, which the terrain puts
+/// at its far (-z) edge; column 0 is the image's left column, at the terrain's -x edge.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Heightmap {
+    columns: u32,
+    rows: u32,
+    levels: Vec<f32>,
+}
+
+impl Heightmap {
+    /// A heightmap of `columns` x `rows` grey levels, given row by row from the top row.
+    pub fn new(columns: u32, rows: u32, levels: Vec<f32>) -> Result<Self, HeightmapError> {
+        Self::check_size(columns, rows)?;
+        if levels.len() != columns as usize * rows as usize {
+            return Err(HeightmapError::SampleCount {
+                columns,
+                rows,
+                len: levels.len(),
+            });
+        }
+        if let Some(index) = levels.iter().position(|level| !level.is_finite()) {
+            let index = index as u32;
+            return Err(HeightmapError::NotFinite {
+                row: index / columns,
+                column: index % columns,
+            });
+        }
+        Ok(Self {
+            columns,
+            rows,
+            levels,
+        })
+    }
+
+    /// The heightmap of a decoded image. Colour images are reduced to their luminance; 8-bit
+    /// images give whole levels, 16-bit ones fractional levels (`value / 257`).
+    pub fn from_image(image: &DynamicImage) -> Result<Self, HeightmapError> {
+        let (columns, rows) = (image.width(), image.height());
+        // Check the size before converting, so a huge image fails before a huge allocation.
+        Self::check_size(columns, rows)?;
+        let grey = image.to_luma16();
+        let levels = grey.pixels().map(|p| f32::from(p.0[0]) / 257.0).collect();
+        Self::new(columns, rows, levels)
+    }
+
+    /// Reads a heightmap from an image file (PNG, BMP, JPEG, ...; the format is recognised from
+    /// the content). Errors name the file.
+    pub fn load(path: &Path) -> Result<Self, WorldError> {
+        let image = read_image(path)?;
+        Self::from_image(&image).map_err(|problem| WorldError::BadHeightmap {
+            path: path.to_path_buf(),
+            problem,
+        })
+    }
+
+    /// Whether a heightmap may have `columns` x `rows` samples (2 to [`MAX_HEIGHTMAP_SIDE`] per side).
+    pub fn check_size(columns: u32, rows: u32) -> Result<(), HeightmapError> {
+        if columns < 2 || rows < 2 {
+            Err(HeightmapError::TooSmall { columns, rows })
+        } else if columns > MAX_HEIGHTMAP_SIDE || rows > MAX_HEIGHTMAP_SIDE {
+            Err(HeightmapError::TooLarge { columns, rows })
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Samples per row (the image's width).
+    pub fn columns(&self) -> u32 {
+        self.columns
+    }
+
+    /// Number of rows (the image's height).
+    pub fn rows(&self) -> u32 {
+        self.rows
+    }
+
+    /// Grey level at `row`, `column` (0.0..=255.0 for images). Panics when out of range.
+    pub fn level(&self, row: u32, column: u32) -> f32 {
+        assert!(
+            row < self.rows && column < self.columns,
+            "sample out of range"
+        );
+        self.levels[(row * self.columns + column) as usize]
+    }
+
+    /// All grey levels, row by row from the top row.
+    pub fn levels(&self) -> &[f32] {
+        &self.levels
+    }
+
+    /// The heightmap as a 16-bit greyscale image (`level * 257`, clamped to 0..=65535).
+    pub fn to_image(&self) -> image::ImageBuffer<image::Luma<u16>, Vec<u16>> {
+        let data = self
+            .levels
+            .iter()
+            .map(|level| (level * 257.0).round().clamp(0.0, 65535.0) as u16)
+            .collect();
+        image::ImageBuffer::from_raw(self.columns, self.rows, data)
+            .expect("a heightmap holds exactly columns * rows levels")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use image::{GrayImage, ImageBuffer, Luma, Rgb, RgbImage};
+
+    #[test]
+    fn eight_bit_levels_are_whole() {
+        let image = GrayImage::from_fn(3, 2, |x, y| Luma([(x * 100 + y) as u8]));
+        let map = Heightmap::from_image(&DynamicImage::ImageLuma8(image)).expect("valid");
+        assert_eq!((map.columns(), map.rows()), (3, 2));
+        assert_eq!(map.level(0, 0), 0.0);
+        assert_eq!(map.level(0, 2), 200.0);
+        assert_eq!(map.level(1, 1), 101.0);
+    }
+
+    #[test]
+    fn sixteen_bit_levels_keep_precision() {
+        let image: ImageBuffer<Luma<u16>, Vec<u16>> = ImageBuffer::from_fn(2, 2, |x, y| {
+            Luma([[0, 65535, 257 * 100 + 128, 1][(y * 2 + x) as usize]])
+        });
+        let map = Heightmap::from_image(&DynamicImage::ImageLuma16(image)).expect("valid");
+        assert_eq!(map.level(0, 0), 0.0);
+        assert_eq!(map.level(0, 1), 255.0);
+        assert!((map.level(1, 0) - (100.0 + 128.0 / 257.0)).abs() < 1e-4);
+        assert!(map.level(1, 1) > 0.0 && map.level(1, 1) < 0.01);
+    }
+
+    #[test]
+    fn grey_rgb_reads_as_its_grey_level() {
+        let image = RgbImage::from_fn(4, 3, |x, _| Rgb([x as u8 * 60; 3]));
+        let map = Heightmap::from_image(&DynamicImage::ImageRgb8(image)).expect("valid");
+        assert_eq!(map.level(2, 3), 180.0);
+    }
+
+    #[test]
+    fn rejects_bad_grids() {
+        assert_eq!(
+            Heightmap::new(1, 5, vec![0.0; 5]),
+            Err(HeightmapError::TooSmall {
+                columns: 1,
+                rows: 5
+            })
+        );
+        assert!(matches!(
+            Heightmap::new(MAX_HEIGHTMAP_SIDE + 1, 2, Vec::new()),
+            Err(HeightmapError::TooLarge { .. })
+        ));
+        assert!(matches!(
+            Heightmap::new(2, 2, vec![0.0; 3]),
+            Err(HeightmapError::SampleCount { len: 3, .. })
+        ));
+        assert_eq!(
+            Heightmap::new(2, 2, vec![0.0, 1.0, f32::NAN, 3.0]),
+            Err(HeightmapError::NotFinite { row: 1, column: 0 })
+        );
+    }
+
+    #[test]
+    fn round_trips_through_a_sixteen_bit_image() {
+        let map = Heightmap::new(3, 2, vec![0.0, 12.5, 255.0, 100.0, 99.75, 3.0]).expect("valid");
+        let back =
+            Heightmap::from_image(&DynamicImage::ImageLuma16(map.to_image())).expect("valid");
+        for (a, b) in map.levels().iter().zip(back.levels()) {
+            assert!((a - b).abs() < 1.0 / 257.0, "{a} vs {b}");
+        }
+    }
+}

@@ -1,0 +1,729 @@
+//! The terrain's static mesh, built once: the part of the heightfield at or above the water, in
+//! square chunks, each at several levels of detail.
+//!
+//! Every chunk covers [`CHUNK_CELLS`] x [`CHUNK_CELLS`] cells and is stored at strides 1, 2, 4, ...
+//! up to its size (level 0 is every sample, level 1 every other one, ...). Each level knows how far
+//! it strays vertically from the full surface, so a renderer can pick per chunk the coarsest level
+//! whose error is too small to see ([`TerrainMesh::select`]). Chunk edges hang short vertical
+//! "skirts" below the surface, which hide the cracks where neighbouring chunks at different levels
+//! meet.
+//!
+//! Triangles are cut along the water (y = 0): heights vary linearly across a triangle, so this
+//! keeps exactly the surface the course's renderer kept by discarding fragments below the water,
+//! but the GPU never sees the underwater part and needs no `discard` (which would cost it its
+//! early depth test).
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+use super::Heightfield;
+use crate::camera::Frustum;
+
+/// Cells along a side of a chunk (the last chunk of a row or column may be smaller).
+pub const CHUNK_CELLS: u32 = 32;
+
+/// One level of detail of one chunk: its own block of vertices, and indices into that block
+/// (the surface's triangles, then its skirts').
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChunkLevel {
+    /// First vertex of the block in [`TerrainMesh::positions`]; the indices count from it.
+    pub base_vertex: u32,
+    /// Vertices in the block.
+    pub vertex_count: u32,
+    /// First index in [`TerrainMesh::indices`].
+    pub first_index: u32,
+    /// Indices of the surface's triangles, from `first_index`.
+    pub surface_indices: u32,
+    /// Indices of the surface and the skirts that follow it.
+    pub index_count: u32,
+    /// Largest vertical distance, in world units, between this level's visible surface and the
+    /// full-resolution one (never less than the finer levels').
+    pub error: f32,
+}
+
+/// A square of the terrain at all its levels of detail.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Chunk {
+    /// Lowest corner of the box around the chunk's geometry above the water.
+    pub min: Vec3,
+    /// Highest corner of that box.
+    pub max: Vec3,
+    /// Level 0 (every sample) first, then successively halved resolutions.
+    pub levels: Vec<ChunkLevel>,
+}
+
+/// What to draw for one chunk at one level: a range of indices into a block of vertices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DrawRange {
+    /// First index in [`TerrainMesh::indices`].
+    pub first_index: u32,
+    /// Number of indices.
+    pub index_count: u32,
+    /// Added to every index to find the vertex in [`TerrainMesh::positions`].
+    pub base_vertex: u32,
+}
+
+/// What the level-of-detail choice needs to know about the view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodView {
+    /// The camera's position.
+    pub eye: Vec3,
+    /// What the camera sees (of the mirrored world, when `mirrored`).
+    pub frustum: Frustum,
+    /// Pixels covered by one world unit seen face-on at a distance of one unit:
+    /// `viewport height / (2 tan(vertical field of view / 2))`.
+    pub pixels_per_unit: f32,
+    /// Largest error allowed on screen, in pixels.
+    pub max_error_pixels: f32,
+    /// Whether this is the mirrored pass (chunks are tested mirrored in y = 0).
+    pub mirrored: bool,
+}
+
+/// The terrain above the water as indexed triangle lists, in chunks and levels of detail.
+///
+/// Every chunk level has its own compact block of vertices (its samples, the points where its
+/// edges cross the water, the bottoms of its skirts) and 16-bit indices relative to the block:
+/// a GPU then only processes the vertices a draw uses. Surface triangles are wound
+/// counter-clockwise seen from above (their normals point up, +y); skirts are two-sided.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TerrainMesh {
+    /// World positions (x, y, z) of all blocks, one after the other.
+    pub positions: Vec<[f32; 3]>,
+    /// Triangle-list indices, relative to their level's `base_vertex`, chunk by chunk and level
+    /// by level.
+    pub indices: Vec<u16>,
+    /// The chunks, row by row from the far row. Chunks entirely under water have no indices.
+    pub chunks: Vec<Chunk>,
+}
+
+impl TerrainMesh {
+    /// Builds the mesh of `field`'s part at or above y = 0.
+    pub fn new(field: &Heightfield) -> Self {
+        let spans = |samples: u32| -> Vec<(u32, u32)> {
+            (0..samples - 1)
+                .step_by(CHUNK_CELLS as usize)
+                .map(|start| (start, (start + CHUNK_CELLS).min(samples - 1)))
+                .collect()
+        };
+        let (row_spans, column_spans) = (spans(field.rows()), spans(field.columns()));
+        let errors: Vec<Vec<f32>> = row_spans
+            .iter()
+            .flat_map(|&r| column_spans.iter().map(move |&c| (r, c)))
+            .map(|(r, c)| level_errors(field, r, c))
+            .collect();
+        let mut mesh = TerrainMesh {
+            positions: Vec::new(),
+            indices: Vec::new(),
+            chunks: Vec::with_capacity(errors.len()),
+        };
+        for (i, &rows) in row_spans.iter().enumerate() {
+            for (j, &columns) in column_spans.iter().enumerate() {
+                // Skirts hang deep enough to meet any neighbour's coarsest surface.
+                let coarsest_error = |di: isize, dj: isize| {
+                    let (ni, nj) = (i as isize + di, j as isize + dj);
+                    let inside = (0..row_spans.len() as isize).contains(&ni)
+                        && (0..column_spans.len() as isize).contains(&nj);
+                    let errors =
+                        inside.then(|| &errors[ni as usize * column_spans.len() + nj as usize]);
+                    errors.and_then(|e| e.last().copied()).unwrap_or(0.0)
+                };
+                let skirt_depth = [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)]
+                    .iter()
+                    .map(|&(di, dj)| coarsest_error(di, dj))
+                    .fold(0.0, f32::max)
+                    + 0.5 * field.cell_size();
+                let chunk_errors = &errors[i * column_spans.len() + j];
+                let chunk = mesh.add_chunk(field, rows, columns, chunk_errors, skirt_depth);
+                mesh.chunks.push(chunk);
+            }
+        }
+        mesh
+    }
+
+    /// Builds every level of the chunk spanning samples `rows.0..=rows.1` x
+    /// `columns.0..=columns.1`, appending their blocks.
+    fn add_chunk(
+        &mut self,
+        field: &Heightfield,
+        rows: (u32, u32),
+        columns: (u32, u32),
+        errors: &[f32],
+        skirt_depth: f32,
+    ) -> Chunk {
+        let mut levels = Vec::with_capacity(errors.len());
+        for (level, &error) in errors.iter().enumerate() {
+            let stride = 1 << level;
+            let (row_samples, column_samples) = (samples(rows, stride), samples(columns, stride));
+            let mut block = Block::default();
+            for &row in &row_samples {
+                for &column in &column_samples {
+                    block.positions.push(field.point(row, column).to_array());
+                }
+            }
+            let width = column_samples.len();
+            let (last_row, last_column) = (row_samples.len() - 1, width - 1);
+            let at = |i: usize, j: usize| (i * width + j) as u32;
+            for i in 0..last_row {
+                for j in 0..last_column {
+                    let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
+                    // (a, b, c) and (c, b, d) turn counter-clockwise seen from above.
+                    block.add([a, b, c]);
+                    block.add([c, b, d]);
+                }
+            }
+            let surface_indices = block.indices.len() as u32;
+            let edges: [Vec<u32>; 4] = [
+                (0..width).map(|j| at(0, j)).collect(),
+                (0..width).map(|j| at(last_row, j)).collect(),
+                (0..=last_row).map(|i| at(i, 0)).collect(),
+                (0..=last_row).map(|i| at(i, last_column)).collect(),
+            ];
+            for edge in edges {
+                for pair in edge.windows(2) {
+                    block.skirt(pair[0], pair[1], skirt_depth);
+                }
+            }
+            levels.push(ChunkLevel {
+                base_vertex: self.positions.len() as u32,
+                vertex_count: block.positions.len() as u32,
+                first_index: self.indices.len() as u32,
+                surface_indices,
+                index_count: block.indices.len() as u32,
+                error,
+            });
+            // A level has at most 33 x 33 samples plus a few crossings and skirt vertices, far
+            // below the 65536 that 16-bit indices can reach.
+            debug_assert!(block.positions.len() <= usize::from(u16::MAX) + 1);
+            self.positions.extend(block.positions);
+            self.indices.extend(block.indices.iter().map(|&i| i as u16));
+        }
+        let heights = (rows.0..=rows.1)
+            .flat_map(|r| (columns.0..=columns.1).map(move |c| field.height(r, c)));
+        let (low, high) = heights.fold((f32::MAX, f32::MIN), |(lo, hi), h| (lo.min(h), hi.max(h)));
+        let (first, last) = (
+            field.point(rows.0, columns.0),
+            field.point(rows.1, columns.1),
+        );
+        Chunk {
+            min: Vec3::new(first.x, (low - skirt_depth).max(0.0), first.z),
+            max: Vec3::new(last.x, high.max(0.0), last.z),
+            levels,
+        }
+    }
+
+    /// The surface triangles of `level` over all chunks (chunks with fewer levels at their
+    /// coarsest), as world positions, without skirts.
+    pub fn surface_triangles(&self, level: usize) -> Vec<[Vec3; 3]> {
+        self.chunks
+            .iter()
+            .filter_map(|chunk| chunk.levels.get(level).or(chunk.levels.last()))
+            .flat_map(|l| self.triangles(l, 0..l.surface_indices))
+            .collect()
+    }
+
+    /// The triangles of `level` whose indices are `range` (relative to its first index), as
+    /// world positions.
+    pub fn triangles(&self, level: &ChunkLevel, range: std::ops::Range<u32>) -> Vec<[Vec3; 3]> {
+        let start = (level.first_index + range.start) as usize;
+        let end = (level.first_index + range.end) as usize;
+        let vertex =
+            |i: u16| Vec3::from_array(self.positions[level.base_vertex as usize + usize::from(i)]);
+        self.indices[start..end]
+            .chunks_exact(3)
+            .map(|t| [vertex(t[0]), vertex(t[1]), vertex(t[2])])
+            .collect()
+    }
+
+    /// Number of surface triangles of `level` over all chunks (chunks with fewer levels count
+    /// at their coarsest).
+    pub fn triangle_count(&self, level: usize) -> usize {
+        self.chunks
+            .iter()
+            .filter_map(|chunk| chunk.levels.get(level).or(chunk.levels.last()))
+            .map(|l| l.surface_indices as usize / 3)
+            .sum()
+    }
+
+    /// The chunks to draw for `view`, nearest first (so the depth test hides what is behind
+    /// before it is shaded), each at the coarsest level whose error stays within
+    /// `view.max_error_pixels` on screen; chunks out of view or under water are left out.
+    pub fn select(&self, view: &LodView) -> Vec<DrawRange> {
+        let mut chosen: Vec<(f32, DrawRange)> = self
+            .chunks
+            .iter()
+            .filter(|chunk| chunk.levels.first().is_some_and(|l| l.index_count > 0))
+            .filter_map(|chunk| {
+                let (min, max) = if view.mirrored {
+                    (
+                        Vec3::new(chunk.min.x, -chunk.max.y, chunk.min.z),
+                        Vec3::new(chunk.max.x, -chunk.min.y, chunk.max.z),
+                    )
+                } else {
+                    (chunk.min, chunk.max)
+                };
+                if !view.frustum.intersects_box(min, max) {
+                    return None;
+                }
+                let distance = (view.eye.clamp(min, max) - view.eye).length().max(1e-3);
+                let allowed = view.max_error_pixels * distance / view.pixels_per_unit;
+                let level = chunk
+                    .levels
+                    .iter()
+                    .rev()
+                    .find(|l| l.error <= allowed)
+                    .unwrap_or(&chunk.levels[0]);
+                let range = DrawRange {
+                    first_index: level.first_index,
+                    index_count: level.index_count,
+                    base_vertex: level.base_vertex,
+                };
+                // Order by the distance to the box's centre: the eye may be inside several boxes,
+                // which are all at distance 0 from their surfaces.
+                let order = ((min + max) * 0.5 - view.eye).length_squared();
+                Some((order, range))
+            })
+            .collect();
+        chosen.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chosen.into_iter().map(|(_, range)| range).collect()
+    }
+}
+
+/// The samples of the span `first..=last` at `stride`, always including `last`.
+fn samples((first, last): (u32, u32), stride: u32) -> Vec<u32> {
+    let mut list: Vec<u32> = (first..last).step_by(stride as usize).collect();
+    list.push(last);
+    list
+}
+
+/// The error of each level of the chunk spanning `rows` x `columns`: the largest vertical distance
+/// between the visible surfaces (heights below the water count as the water's 0) of the level and
+/// of the full resolution, made non-decreasing from level to level. Levels go up to the stride that
+/// spans the whole chunk.
+fn level_errors(field: &Heightfield, rows: (u32, u32), columns: (u32, u32)) -> Vec<f32> {
+    let span = (rows.1 - rows.0).max(columns.1 - columns.0).max(1);
+    let level_count = (span.next_power_of_two().trailing_zeros() + 1) as usize;
+    let visible = |r: u32, c: u32| field.height(r, c).max(0.0);
+    let mut errors = Vec::with_capacity(level_count);
+    let mut worst = 0.0f32;
+    for level in 0..level_count {
+        let stride = 1u32 << level;
+        let (row_samples, column_samples) = (samples(rows, stride), samples(columns, stride));
+        for pair in row_samples.windows(2) {
+            for step in column_samples.windows(2) {
+                let (ra, rb, ca, cb) = (pair[0], pair[1], step[0], step[1]);
+                let [ha, hb, hc, hd] =
+                    [(ra, ca), (rb, ca), (ra, cb), (rb, cb)].map(|(r, c)| field.height(r, c));
+                for r in ra..=rb {
+                    for c in ca..=cb {
+                        let fz = (r - ra) as f32 / (rb - ra) as f32;
+                        let fx = (c - ca) as f32 / (cb - ca) as f32;
+                        // The same split as the mesh: (a, b, c) below the diagonal, (c, b, d) above.
+                        let coarse = if fx + fz <= 1.0 {
+                            ha + (hc - ha) * fx + (hb - ha) * fz
+                        } else {
+                            hd + (hb - hd) * (1.0 - fx) + (hc - hd) * (1.0 - fz)
+                        };
+                        worst = worst.max((coarse.max(0.0) - visible(r, c)).abs());
+                    }
+                }
+            }
+        }
+        errors.push(worst);
+    }
+    errors
+}
+
+/// One chunk level's vertices and indices under construction. Triangles are cut along y = 0,
+/// each crossing point shared by the triangles of its edge.
+#[derive(Default)]
+struct Block {
+    positions: Vec<[f32; 3]>,
+    /// Crossing vertex of each cut edge, keyed by its endpoints (smaller index first).
+    crossings: HashMap<(u32, u32), u32>,
+    indices: Vec<u32>,
+}
+
+impl Block {
+    fn height(&self, vertex: u32) -> f32 {
+        self.positions[vertex as usize][1]
+    }
+
+    /// A two-sided vertical strip hanging `depth` below the edge from `p` to `q`, cut at the
+    /// water.
+    fn skirt(&mut self, p: u32, q: u32, depth: f32) {
+        // Nothing to hide where the edge is under water.
+        if self.height(p) < 0.0 && self.height(q) < 0.0 {
+            return;
+        }
+        let mut below = |v: u32| {
+            let [x, y, z] = self.positions[v as usize];
+            self.positions.push([x, y - depth, z]);
+            self.positions.len() as u32 - 1
+        };
+        let (p_low, q_low) = (below(p), below(q));
+        for triangle in [
+            [p, q, q_low],
+            [p, q_low, p_low],
+            [q, p, p_low],
+            [q, p_low, q_low],
+        ] {
+            self.add(triangle);
+        }
+    }
+
+    /// Adds the part of `triangle` at or above the water.
+    fn add(&mut self, triangle: [u32; 3]) {
+        let above = triangle.map(|v| self.height(v) >= 0.0);
+        if above.iter().all(|&a| a) {
+            self.indices.extend(triangle);
+            return;
+        }
+        if !above.iter().any(|&a| a) {
+            return;
+        }
+        // Sutherland-Hodgman against one plane: keep the vertices above, insert the crossings,
+        // in the triangle's own order (so the winding is kept). Gives 3 or 4 vertices.
+        let mut polygon = Vec::with_capacity(4);
+        for i in 0..3 {
+            let (p, q) = (triangle[i], triangle[(i + 1) % 3]);
+            if above[i] {
+                polygon.push(p);
+            }
+            if above[i] != above[(i + 1) % 3] {
+                polygon.push(self.crossing(p, q));
+            }
+        }
+        for k in 1..polygon.len() - 1 {
+            self.indices
+                .extend([polygon[0], polygon[k], polygon[k + 1]]);
+        }
+    }
+
+    /// The vertex where edge (p, q) crosses y = 0 (one above, one below).
+    fn crossing(&mut self, p: u32, q: u32) -> u32 {
+        let key = (p.min(q), p.max(q));
+        if let Some(&vertex) = self.crossings.get(&key) {
+            return vertex;
+        }
+        // Interpolate from the lower-indexed end so both triangles of the edge agree exactly.
+        let (from, to) = (
+            self.positions[key.0 as usize],
+            self.positions[key.1 as usize],
+        );
+        let t = from[1] / (from[1] - to[1]);
+        let vertex = self.positions.len() as u32;
+        self.positions.push([
+            from[0] + (to[0] - from[0]) * t,
+            0.0,
+            from[2] + (to[2] - from[2]) * t,
+        ]);
+        self.crossings.insert(key, vertex);
+        vertex
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::strategy::Strategy;
+
+    use super::*;
+    use crate::camera::{CameraPose, Lens};
+    use crate::config::SceneConfig;
+    use crate::world::Heightmap;
+
+    fn field(columns: u32, rows: u32, levels: Vec<f32>) -> Heightfield {
+        let map = Heightmap::new(columns, rows, levels).expect("valid");
+        Heightfield::new(&map, &SceneConfig::default())
+    }
+
+    /// Area of triangles projected on the water plane (summed in f64).
+    fn plan_area(triangles: &[[Vec3; 3]]) -> f32 {
+        triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                let flat = |v: Vec3| glam::DVec3::new(f64::from(v.x), 0.0, f64::from(v.z));
+                (flat(b) - flat(a)).cross(flat(c) - flat(a)).length() / 2.0
+            })
+            .sum::<f64>() as f32
+    }
+
+    #[test]
+    fn full_resolution_land_is_two_upward_triangles_per_cell() {
+        for (columns, rows) in [(2, 2), (3, 7), (16, 5), (70, 40)] {
+            // Levels 100..=255: all at or above the water.
+            let levels = (0..columns * rows)
+                .map(|i| 100.0 + (i * 37 % 156) as f32)
+                .collect();
+            let f = field(columns, rows, levels);
+            let mesh = TerrainMesh::new(&f);
+            assert_eq!(
+                mesh.triangle_count(0),
+                2 * ((columns - 1) * (rows - 1)) as usize
+            );
+            let surface = mesh.surface_triangles(0);
+            for [a, b, c] in &surface {
+                assert!((*b - *a).cross(*c - *a).y > 0.0, "triangle faces down");
+            }
+            let extent = f.extent() - f.cell_size();
+            assert!((plan_area(&surface) - extent.x * extent.y).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn every_level_covers_the_whole_land() {
+        let levels = (0..70 * 40)
+            .map(|i| 100.0 + (i * 37 % 156) as f32)
+            .collect();
+        let f = field(70, 40, levels);
+        let mesh = TerrainMesh::new(&f);
+        let extent = f.extent() - f.cell_size();
+        for level in 0..6 {
+            let surface = mesh.surface_triangles(level);
+            assert!(
+                (plan_area(&surface) - extent.x * extent.y).abs() < 1e-3,
+                "level {level}"
+            );
+            if level > 0 {
+                assert!(mesh.triangle_count(level) < mesh.triangle_count(level - 1));
+            }
+        }
+    }
+
+    #[test]
+    fn chunks_split_the_grid() {
+        let f = field(70, 40, vec![150.0; 70 * 40]);
+        let mesh = TerrainMesh::new(&f);
+        // 69 x 39 cells: 3 x 2 chunks of up to 32 cells.
+        assert_eq!(mesh.chunks.len(), 6);
+        assert_eq!(mesh.chunks[0].levels.len(), 6, "strides 1 to 32");
+        assert_eq!(
+            mesh.chunks[5].levels.len(),
+            4,
+            "a 5 x 7-cell chunk: strides 1 to 8"
+        );
+        for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
+            let indices = &mesh.indices
+                [level.first_index as usize..(level.first_index + level.index_count) as usize];
+            assert!(indices.iter().all(|&i| u32::from(i) < level.vertex_count));
+        }
+        // Blocks follow one another without gaps or overlaps.
+        let mut next = 0;
+        for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
+            assert_eq!(level.base_vertex, next);
+            next += level.vertex_count;
+        }
+        assert_eq!(next as usize, mesh.positions.len());
+    }
+
+    #[test]
+    fn planes_have_no_error_and_bumps_do() {
+        // A tilted plane is exact at every level.
+        let ramp = field(
+            33,
+            33,
+            (0..33 * 33)
+                .map(|i| 110.0 + (i % 33) as f32 * 3.0)
+                .collect(),
+        );
+        let mesh = TerrainMesh::new(&ramp);
+        assert!(mesh.chunks[0].levels.iter().all(|l| l.error < 1e-4));
+        // A single raised sample: exact at level 0, off by its height when skipped.
+        let mut levels = vec![150.0; 33 * 33];
+        levels[16 * 33 + 15] = 250.0;
+        let bump = field(33, 33, levels);
+        let mesh = TerrainMesh::new(&bump);
+        let errors: Vec<f32> = mesh.chunks[0].levels.iter().map(|l| l.error).collect();
+        assert_eq!(errors[0], 0.0);
+        assert!((errors[1] - 1.5).abs() < 1e-4, "{errors:?}");
+        assert!(errors.windows(2).all(|w| w[0] <= w[1]), "{errors:?}");
+    }
+
+    #[test]
+    fn nothing_under_water_is_kept() {
+        let mesh = TerrainMesh::new(&field(4, 4, vec![20.0; 16]));
+        assert!(mesh.indices.is_empty());
+    }
+
+    #[test]
+    fn the_coast_is_cut_exactly_at_the_waterline() {
+        // A ramp along x: levels 40, 80, ..., so heights -0.9, -0.3, 0.3, 0.9, 1.5 (y = 0 halfway
+        // between columns 1 and 2).
+        let levels = (0..5 * 3).map(|i| 40.0 + 40.0 * (i % 5) as f32).collect();
+        let f = field(5, 3, levels);
+        let mesh = TerrainMesh::new(&f);
+        let surface = mesh.surface_triangles(0);
+        for [a, b, c] in &surface {
+            assert!(a.y >= 0.0 && b.y >= 0.0 && c.y >= 0.0);
+            assert!((*b - *a).cross(*c - *a).y > 0.0, "winding kept");
+        }
+        // Kept: from the waterline (x halfway between columns 1 and 2) to the last column,
+        // i.e. 2.5 cells wide, over 2 cells of depth.
+        let cell = f.cell_size();
+        let expected = 2.5 * cell * 2.0 * cell;
+        assert!(
+            (plan_area(&surface) - expected).abs() < 1e-4,
+            "{}",
+            plan_area(&surface)
+        );
+        // The crossing points sit exactly on the waterline between columns 1 and 2.
+        let x = (f.point(0, 1).x + f.point(0, 2).x) / 2.0;
+        let waterline: Vec<Vec3> = surface
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|v| v.y == 0.0)
+            .collect();
+        assert!(!waterline.is_empty());
+        for v in waterline {
+            let on_row = (0..3).any(|r| (v.z - f.point(r, 0).z).abs() < 1e-5);
+            if on_row {
+                assert!((v.x - x).abs() < 1e-5, "{v:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn skirts_hang_below_the_chunk_edges() {
+        let f = field(40, 40, vec![150.0; 1600]);
+        let mesh = TerrainMesh::new(&f);
+        let level = mesh.chunks[0].levels[0];
+        assert!(level.index_count > level.surface_indices);
+        let skirts = mesh.triangles(&level, level.surface_indices..level.index_count);
+        let top = f.height(0, 0);
+        assert!(
+            skirts
+                .iter()
+                .flatten()
+                .all(|v| v.y <= top + 1e-6 && v.y >= 0.0)
+        );
+        assert!(skirts.iter().flatten().any(|v| v.y < top));
+        // Vertical: no area seen from above.
+        assert!(plan_area(&skirts) < 1e-6);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn any_heightmap_gives_a_valid_mesh(
+            (columns, rows, levels) in (2u32..40, 2u32..40).prop_flat_map(|(c, r)| {
+                (proptest::strategy::Just(c), proptest::strategy::Just(r),
+                 proptest::collection::vec(0.0f32..=255.0, (c * r) as usize))
+            })
+        ) {
+            let f = field(columns, rows, levels);
+            let mesh = TerrainMesh::new(&f);
+            for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
+                let end = (level.first_index + level.index_count) as usize;
+                let indices = &mesh.indices[level.first_index as usize..end];
+                proptest::prop_assert!(indices.iter().all(|&i| u32::from(i) < level.vertex_count));
+                for [a, b, c] in mesh.triangles(level, 0..level.index_count) {
+                    proptest::prop_assert!(a.y >= 0.0 && b.y >= 0.0 && c.y >= 0.0, "below the water");
+                }
+                for [a, b, c] in mesh.triangles(level, 0..level.surface_indices) {
+                    proptest::prop_assert!((b - a).cross(c - a).y >= -1e-6, "a surface triangle faces down");
+                }
+            }
+            // The full-resolution surface never covers more than the grid.
+            let extent = f.extent() - f.cell_size();
+            proptest::prop_assert!(plan_area(&mesh.surface_triangles(0)) <= extent.x * extent.y * (1.0 + 1e-4));
+        }
+    }
+
+    fn view(mesh_mirrored: bool, pose: CameraPose) -> LodView {
+        let lens = Lens {
+            field_of_view_degrees: 45.0,
+            near: 0.1,
+            far: 500.0,
+        };
+        let view_projection = lens.projection(16.0 / 9.0) * pose.view_matrix();
+        LodView {
+            eye: pose.position,
+            frustum: crate::camera::Frustum::from_view_projection(view_projection),
+            pixels_per_unit: 720.0 / (2.0 * (22.5f32).to_radians().tan()),
+            max_error_pixels: 1.0,
+            mirrored: mesh_mirrored,
+        }
+    }
+
+    #[test]
+    fn distant_chunks_are_coarser_and_hidden_ones_left_out() {
+        // Gentle hills: coarse levels are good enough far away.
+        let levels = (0..257 * 257)
+            .map(|i| {
+                let (x, z) = ((i % 257) as f32, (i / 257) as f32);
+                150.0 + 40.0 * (x / 20.0).sin() * (z / 15.0).cos()
+            })
+            .collect();
+        let mesh = TerrainMesh::new(&field(257, 257, levels));
+        let level_of = |range: &DrawRange| {
+            mesh.chunks
+                .iter()
+                .flat_map(|c| c.levels.iter().enumerate())
+                .find(|(_, l)| {
+                    l.first_index == range.first_index && l.base_vertex == range.base_vertex
+                })
+                .map(|(i, _)| i)
+                .expect("a chunk level")
+        };
+        // From above the middle looking at the horizon toward -z: the near chunks are fine,
+        // the far ones coarse, and the ones behind are culled.
+        let pose = CameraPose::new(Vec3::new(0.0, 2.5, 0.0), 0.0, -10.0);
+        let chosen = mesh.select(&view(false, pose));
+        assert!(chosen.len() < mesh.chunks.len(), "nothing was culled");
+        let levels: Vec<usize> = chosen.iter().map(level_of).collect();
+        assert!(
+            levels.contains(&0) && levels.iter().any(|&l| l > 0),
+            "{levels:?}"
+        );
+        // Every choice keeps its error within a pixel.
+        let v = view(false, pose);
+        for range in &chosen {
+            let chunk = mesh
+                .chunks
+                .iter()
+                .find(|c| c.levels.iter().any(|l| l.first_index == range.first_index))
+                .expect("chunk");
+            let level = &chunk.levels[level_of(range)];
+            let distance = (v.eye.clamp(chunk.min, chunk.max) - v.eye).length();
+            assert!(
+                level.error * v.pixels_per_unit / distance <= 1.0 + 1e-4 || level_of(range) == 0
+            );
+        }
+        // Nearest first.
+        let centre_distance = |range: &DrawRange| {
+            let chunk = mesh
+                .chunks
+                .iter()
+                .find(|c| c.levels.iter().any(|l| l.base_vertex == range.base_vertex))
+                .expect("chunk");
+            ((chunk.min + chunk.max) * 0.5 - v.eye).length()
+        };
+        assert!(
+            chosen
+                .windows(2)
+                .all(|w| centre_distance(&w[0]) <= centre_distance(&w[1]))
+        );
+        // Far above, everything fits in few triangles.
+        let high = CameraPose::new(Vec3::new(0.0, 150.0, 0.0), 0.0, -89.0);
+        let coarse: u32 = mesh
+            .select(&view(false, high))
+            .iter()
+            .map(|r| r.index_count)
+            .sum();
+        let fine: u32 = chosen.iter().map(|r| r.index_count).sum();
+        assert!(coarse < fine, "{coarse} vs {fine}");
+    }
+
+    #[test]
+    fn the_mirrored_pass_tests_mirrored_chunks() {
+        let mesh = TerrainMesh::new(&field(33, 33, vec![250.0; 33 * 33]));
+        // High above the land looking straight up: the land is behind, its mirror image further.
+        let up = CameraPose::new(Vec3::new(0.0, 5.0, 0.0), 0.0, 89.0);
+        assert!(mesh.select(&view(false, up)).is_empty());
+        assert!(mesh.select(&view(true, up)).is_empty());
+        // Looking down, both the land and its mirror image are ahead.
+        let down = CameraPose::new(Vec3::new(0.0, 5.0, 0.0), 0.0, -89.0);
+        assert_eq!(mesh.select(&view(false, down)).len(), 1);
+        assert_eq!(mesh.select(&view(true, down)).len(), 1);
+    }
+}
