@@ -125,9 +125,7 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
         if (1..=MAX_SIDE).contains(&value) {
             Ok(value)
         } else {
-            Err(format!(
-                "{value} pixels is out of range: sides must be between 1 and {MAX_SIDE}"
-            ))
+            Err(format!("{value} pixels is out of range: sides must be between 1 and {MAX_SIDE}"))
         }
     };
     Ok((side(width)?, side(height)?))
@@ -138,9 +136,7 @@ fn parse_pose(text: &str) -> Result<CameraPose, String> {
 }
 
 fn parse_fov(text: &str) -> Result<f32, String> {
-    let degrees: f32 = text
-        .parse()
-        .map_err(|_| format!("`{text}` is not a number"))?;
+    let degrees: f32 = text.parse().map_err(|_| format!("`{text}` is not a number"))?;
     if (MIN_FIELD_OF_VIEW_DEGREES..=MAX_FIELD_OF_VIEW_DEGREES).contains(&degrees) {
         Ok(degrees)
     } else {
@@ -170,9 +166,7 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
     let windowed = args.screenshot.is_none() && args.export_assets.is_none();
     // Say so before any work when there is nowhere to open the window.
     if windowed && !window::display_available() {
-        return Err(no_display_message(
-            "neither DISPLAY nor WAYLAND_DISPLAY is set",
-        ));
+        return Err(no_display_message("neither DISPLAY nor WAYLAND_DISPLAY is set"));
     }
     if let Some(out) = &args.screenshot {
         // Refuse an unwritable format before any work.
@@ -180,8 +174,7 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
     }
     let world = load_world(&args, &config)?;
     if let Some(dir) = &args.export_assets {
-        let written =
-            terrain_world::export::save_course_folder(&world, dir).map_err(|e| e.to_string())?;
+        let written = terrain_world::export::save_course_folder(&world, dir).map_err(|e| e.to_string())?;
         println!("wrote {} files to {}", written.len(), dir.display());
         return Ok(());
     }
@@ -230,16 +223,11 @@ fn load_world(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String>
         Some(path) => {
             progress(Stage::Heightmap);
             Heightmap::load(path)
-                .map(|heightmap| {
-                    procedural::dress_heightmap(heightmap, args.seed, config, &mut progress)
-                })
+                .map(|heightmap| procedural::dress_heightmap(heightmap, args.seed, config, &mut progress))
                 .map_err(|error| error.to_string())
         }
         None => {
-            let options = ProceduralOptions {
-                seed: args.seed,
-                heightmap_size: args.grid,
-            };
+            let options = ProceduralOptions { seed: args.seed, heightmap_size: args.grid };
             procedural::generate(options, config, &mut progress).map_err(|error| error.to_string())
         }
     };
@@ -284,14 +272,9 @@ fn screenshot(
     out: &Path,
 ) -> Result<(), String> {
     let gpu = open_gpu(args.backend.into())?;
-    let view = FrameView {
-        pose,
-        field_of_view_degrees: args.fov,
-        time_seconds: args.time,
-    };
+    let view = FrameView { pose, field_of_view_degrees: args.fov, time_seconds: args.time };
     let started = Instant::now();
-    let image =
-        render_image(&gpu, world, config, args.size, &view).map_err(|error| error.to_string())?;
+    let image = render_image(&gpu, world, config, args.size, &view).map_err(|error| error.to_string())?;
     terrain::output::save_frame(&image, out).map_err(|error| error.to_string())?;
     eprintln!("rendered in {}", seconds(started.elapsed()));
     println!("wrote {} ({}x{})", out.display(), args.size.0, args.size.1);
@@ -328,11 +311,10 @@ fn open_window(
             eprintln!("mouse released (click in the window or press Tab to look around)")
         }
     };
-    let summary =
-        window::run(world, config, options, &mut notice).map_err(|error| match error {
-            window::WindowError::NoDisplay(reason) => no_display_message(&reason),
-            other => other.to_string(),
-        })?;
+    let summary = window::run(world, config, options, &mut notice).map_err(|error| match error {
+        window::WindowError::NoDisplay(reason) => no_display_message(&reason),
+        other => other.to_string(),
+    })?;
     if summary.frames > 0 {
         eprintln!(
             "{} frames in {}: {:.1} ms a frame on average",

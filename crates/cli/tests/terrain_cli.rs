@@ -39,10 +39,7 @@ fn no_gpu(output: &Output) -> bool {
     if missing {
         assert!(!under_ci(), "CI=true, so this cannot be skipped: {text}");
         // Straight to the terminal: the harness swallows `eprintln!` from passing tests.
-        let _ = writeln!(
-            std::io::stderr(),
-            "\n==== SKIPPED: no Vulkan adapter: {text} ====\n"
-        );
+        let _ = writeln!(std::io::stderr(), "\n==== SKIPPED: no Vulkan adapter: {text} ====\n");
     }
     missing
 }
@@ -76,17 +73,11 @@ fn renders_a_screenshot_off_screen() {
     let text = stderr(&output);
     if !output.status.success() && text.contains("no graphics adapter") && !under_ci() {
         // Straight to the terminal: the harness swallows `eprintln!` from passing tests.
-        let _ = writeln!(
-            std::io::stderr(),
-            "\n==== SKIPPED: no Vulkan adapter: {text} ====\n"
-        );
+        let _ = writeln!(std::io::stderr(), "\n==== SKIPPED: no Vulkan adapter: {text} ====\n");
         return;
     }
     assert!(output.status.success(), "{text}");
-    assert!(
-        text.contains("adapter:"),
-        "the adapter is not printed: {text}"
-    );
+    assert!(text.contains("adapter:"), "the adapter is not printed: {text}");
     assert!(String::from_utf8_lossy(&output.stdout).contains("shot.png"));
     let image = image_size(&out);
     assert_eq!(image, (96, 54));
@@ -96,8 +87,7 @@ fn renders_a_screenshot_off_screen() {
 fn image_size(path: &Path) -> (u32, u32) {
     let bytes = std::fs::read(path).expect("the screenshot exists");
     assert_eq!(&bytes[1..4], b"PNG", "not a PNG");
-    let word =
-        |at: usize| u32::from_be_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    let word = |at: usize| u32::from_be_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
     (word(16), word(20))
 }
 
@@ -110,46 +100,14 @@ fn without_a_display_it_says_so() {
 
 #[test]
 fn malformed_options_are_usage_errors() {
-    assert_fails(
-        &rayterra(&["--camera", "1,2", "--screenshot", "x.png"]),
-        2,
-        "five comma-separated numbers",
-    );
-    assert_fails(
-        &rayterra(&["--camera", "0,1,2,3,100", "--screenshot", "x.png"]),
-        2,
-        "pitch",
-    );
-    assert_fails(
-        &rayterra(&["--size", "100000x100000", "--screenshot", "x.png"]),
-        2,
-        "between 1 and 16384",
-    );
-    assert_fails(
-        &rayterra(&["--size", "0x10", "--screenshot", "x.png"]),
-        2,
-        "between 1 and 16384",
-    );
-    assert_fails(
-        &rayterra(&["--size", "wide", "--screenshot", "x.png"]),
-        2,
-        "WIDTHxHEIGHT",
-    );
-    assert_fails(
-        &rayterra(&["--fov", "0", "--screenshot", "x.png"]),
-        2,
-        "field of view",
-    );
-    assert_fails(
-        &rayterra(&["--time", "nan", "--screenshot", "x.png"]),
-        2,
-        "finite",
-    );
-    assert_fails(
-        &rayterra(&["--assets", "a", "--heightmap", "b.png"]),
-        2,
-        "cannot be used with",
-    );
+    assert_fails(&rayterra(&["--camera", "1,2", "--screenshot", "x.png"]), 2, "five comma-separated numbers");
+    assert_fails(&rayterra(&["--camera", "0,1,2,3,100", "--screenshot", "x.png"]), 2, "pitch");
+    assert_fails(&rayterra(&["--size", "100000x100000", "--screenshot", "x.png"]), 2, "between 1 and 16384");
+    assert_fails(&rayterra(&["--size", "0x10", "--screenshot", "x.png"]), 2, "between 1 and 16384");
+    assert_fails(&rayterra(&["--size", "wide", "--screenshot", "x.png"]), 2, "WIDTHxHEIGHT");
+    assert_fails(&rayterra(&["--fov", "0", "--screenshot", "x.png"]), 2, "field of view");
+    assert_fails(&rayterra(&["--time", "nan", "--screenshot", "x.png"]), 2, "finite");
+    assert_fails(&rayterra(&["--assets", "a", "--heightmap", "b.png"]), 2, "cannot be used with");
 }
 
 #[test]
@@ -157,54 +115,30 @@ fn bad_files_are_named() {
     let out = scratch("never.png");
     let _ = std::fs::remove_file(&out);
     let out_arg = out.to_str().expect("utf-8 path");
-    assert_fails(
-        &rayterra(&["--assets", "/no/such/folder", "--screenshot", out_arg]),
-        1,
-        "/no/such/folder",
-    );
+    assert_fails(&rayterra(&["--assets", "/no/such/folder", "--screenshot", out_arg]), 1, "/no/such/folder");
     let corrupt = scratch("corrupt.png");
     std::fs::write(&corrupt, b"\x89PNG\r\n\x1a\n but then nothing").expect("write");
     assert_fails(
-        &rayterra(&[
-            "--heightmap",
-            corrupt.to_str().expect("utf-8 path"),
-            "--screenshot",
-            out_arg,
-        ]),
+        &rayterra(&["--heightmap", corrupt.to_str().expect("utf-8 path"), "--screenshot", out_arg]),
         1,
         "corrupt.png",
     );
     let incomplete = scratch("incomplete-assets");
     std::fs::create_dir_all(&incomplete).expect("folder");
     assert_fails(
-        &rayterra(&[
-            "--assets",
-            incomplete.to_str().expect("utf-8 path"),
-            "--screenshot",
-            out_arg,
-        ]),
+        &rayterra(&["--assets", incomplete.to_str().expect("utf-8 path"), "--screenshot", out_arg]),
         1,
         "SkyBox5.bmp",
     );
-    assert_fails(
-        &rayterra(&["--screenshot", "picture.tiff", "--grid", "8"]),
-        1,
-        "picture.tiff",
-    );
+    assert_fails(&rayterra(&["--screenshot", "picture.tiff", "--grid", "8"]), 1, "picture.tiff");
     assert!(!out.exists(), "a failed run left {}", out.display());
 }
 
 #[test]
 fn an_unwritable_destination_leaves_no_file() {
     let out = scratch("missing-folder").join("deeper").join("shot.png");
-    let output = rayterra(&[
-        "--screenshot",
-        out.to_str().expect("utf-8 path"),
-        "--size",
-        "32x18",
-        "--grid",
-        "16",
-    ]);
+    let output =
+        rayterra(&["--screenshot", out.to_str().expect("utf-8 path"), "--size", "32x18", "--grid", "16"]);
     if no_gpu(&output) {
         return;
     }
@@ -219,13 +153,7 @@ fn exports_an_asset_folder_that_loads_again() {
     let dir_arg = dir.to_str().expect("utf-8 path");
     let output = rayterra(&["--grid", "16", "--seed", "3", "--export-assets", dir_arg]);
     assert!(output.status.success(), "{}", stderr(&output));
-    for name in [
-        "heightmap.bmp",
-        "terrain-texture3.bmp",
-        "detail.bmp",
-        "SkyBox0.bmp",
-        "SkyBox5.bmp",
-    ] {
+    for name in ["heightmap.bmp", "terrain-texture3.bmp", "detail.bmp", "SkyBox0.bmp", "SkyBox5.bmp"] {
         assert!(dir.join(name).is_file(), "{name} missing");
     }
     let out = scratch("exported.png");

@@ -7,8 +7,10 @@
 //! neighbour's (a geometry or shadow edge), whose colour differs from a neighbour's by more than
 //! [`CONTRAST_THRESHOLD`] (a texture or lighting edge), or whose estimated error exceeds
 //! [`NOISE_THRESHOLD`] (a penumbra or a busy glossy reflection) is re-rendered with a jittered
-//! `REFINE_GRID x REFINE_GRID` grid of samples. (The template used a fixed 3 x 3 grid, on tag edges
-//! only.) Uniform mode takes the same number of stratified samples in every pixel.
+//! `REFINE_GRID x REFINE_GRID` grid of samples, and a noisy one also with more shadow and glossy
+//! samples, as many more as its error estimate asks for (up to [`MAX_NESTED_FACTOR`] times). (The
+//! template used a fixed 3 x 3 grid, on tag edges only.) Uniform mode takes the same number of
+//! stratified samples in every pixel.
 //!
 //! Rows are rendered in parallel, but each pixel's random numbers come from its own coordinates,
 //! so the image is the same bit for bit whatever the number of threads.
@@ -31,8 +33,11 @@ pub const REFINE_GRID: u32 = 4;
 /// Largest per-channel colour difference between neighbours that does not trigger refinement.
 pub const CONTRAST_THRESHOLD: f64 = 0.1;
 /// Largest estimated standard error of a pixel's first-pass colour that does not trigger
-/// refinement (one and a half 8-bit steps).
-pub const NOISE_THRESHOLD: f64 = 1.5 / 255.0;
+/// refinement (two 8-bit steps).
+pub const NOISE_THRESHOLD: f64 = 2.0 / 255.0;
+/// Most nested samples (shadow rays, glossy directions) a refined pixel takes, as a multiple of a
+/// first-pass pixel's.
+pub const MAX_NESTED_FACTOR: u32 = 4;
 /// Largest `--spp`.
 pub const MAX_SPP: u32 = 4096;
 
@@ -202,11 +207,14 @@ impl<'s> Renderer<'s> {
         let mut traces = vec![PixelTrace::default(); n_tracked];
         let rows_done = AtomicU64::new(0);
         let first = Strata::for_count(first_samples);
+        // With many samples a pixel, nested estimates are shared among ceil(sqrt(n)) groups of
+        // them, so their sample count grows with the square root of the pixel's.
+        let first_groups = (first_samples as f64).sqrt().ceil() as u32;
         let trace_row = |y: usize, row: &mut [DVec3], mut row_traces: Option<&mut [PixelTrace]>| {
             let mut rays = 0;
             for (x, c) in row.iter_mut().enumerate() {
                 let trace = row_traces.as_deref_mut().map(|t| &mut t[x]);
-                *c = self.pixel(x as u32, y as u32, FIRST_PASS, first, trace, &mut rays);
+                *c = self.pixel(x as u32, y as u32, FIRST_PASS, first, first_groups, trace, &mut rays);
             }
             self.rays.fetch_add(rays, Ordering::Relaxed);
             let done = rows_done.fetch_add(1, Ordering::Relaxed) + 1;
@@ -226,8 +234,8 @@ impl<'s> Renderer<'s> {
         let mut refined_pixels = 0;
         if track_tags {
             let flagged = pixels_to_refine(&colors, &traces, w, h);
-            refined_pixels = flagged.len() as u64;
             let grid = Strata { nx: REFINE_GRID, ny: REFINE_GRID };
+            refined_pixels = flagged.len() as u64;
             let done = AtomicU64::new(0);
             let total = flagged.len() as u64;
             progress(Progress { stage: Stage::Refining, done: 0, total });
@@ -238,8 +246,9 @@ impl<'s> Renderer<'s> {
                     let mut rays = 0;
                     let values: Vec<DVec3> = chunk
                         .iter()
-                        .map(|&i| {
-                            self.pixel((i % w) as u32, (i / w) as u32, REFINE_PASS, grid, None, &mut rays)
+                        .map(|r| {
+                            let (x, y) = ((r.index % w) as u32, (r.index / w) as u32);
+                            self.pixel(x, y, REFINE_PASS, grid, r.groups, None, &mut rays)
                         })
                         .collect();
                     self.rays.fetch_add(rays, Ordering::Relaxed);
@@ -248,8 +257,8 @@ impl<'s> Renderer<'s> {
                     values
                 })
                 .collect();
-            for (&i, c) in flagged.iter().zip(refined) {
-                colors[i] = c;
+            for (r, c) in flagged.iter().zip(refined) {
+                colors[r.index] = c;
             }
             camera_samples += refined_pixels * grid.count() as u64;
         }
@@ -267,22 +276,23 @@ impl<'s> Renderer<'s> {
     }
 
     /// The colour of pixel `(x, y)` (0, 0 at the top left) from `strata.count()` camera samples
-    /// (at the centre for a single sample, jittered in each cell otherwise). With `trace`, records
-    /// the pixel's tag and noise estimate. Adds the rays traced to `rays`.
+    /// (at the centre for a single sample, jittered in each cell otherwise), their nested
+    /// estimates shared among `groups` groups of samples (see [`Siblings`]): each estimate takes
+    /// `groups` times fewer samples than a lone one. With `trace`, records the pixel's tag and
+    /// noise estimate. Adds the rays traced to `rays`.
+    #[allow(clippy::too_many_arguments)]
     fn pixel(
         &self,
         x: u32,
         y: u32,
         pass: u32,
         strata: Strata,
+        groups: u32,
         mut trace: Option<&mut PixelTrace>,
         rays: &mut u64,
     ) -> DVec3 {
         let mut rng = PixelRng::new(self.settings.seed, x, y, pass);
         let n = strata.count();
-        // Nested estimates are shared among ceil(sqrt(n)) groups of samples, so their sample
-        // count grows with the square root of the pixel's.
-        let groups = (n as f64).sqrt().ceil() as u32;
         let mut sum = DVec3::ZERO;
         let mut cx = TraceContext::new(&mut rng);
         for s in 0..n {
@@ -310,21 +320,34 @@ struct PixelTrace {
     error: f32,
 }
 
-/// Indices of the pixels to refine: an estimated error above [`NOISE_THRESHOLD`], a tag different
-/// from a 4-neighbour's, or a colour differing from a 4-neighbour's by more than
-/// [`CONTRAST_THRESHOLD`] in some channel.
-fn pixels_to_refine(colors: &[DVec3], traces: &[PixelTrace], w: usize, h: usize) -> Vec<usize> {
+/// A pixel to refine: its index and how its nested estimates are shared (see
+/// [`Renderer::pixel`]).
+struct Refinement {
+    index: usize,
+    groups: u32,
+}
+
+/// The pixels to refine: a tag different from a 4-neighbour's or a colour differing from a
+/// 4-neighbour's by more than [`CONTRAST_THRESHOLD`] in some channel (an edge: the refined pixel
+/// takes a grid of camera samples), or an estimated error above [`NOISE_THRESHOLD`] (noise: the
+/// refined pixel also takes more nested samples, as many more as the error says it needs, up to
+/// [`MAX_NESTED_FACTOR`] times).
+fn pixels_to_refine(colors: &[DVec3], traces: &[PixelTrace], w: usize, h: usize) -> Vec<Refinement> {
+    let samples = REFINE_GRID * REFINE_GRID;
     let differs = |a: usize, b: usize| {
         traces[a].tag != traces[b].tag || (colors[a] - colors[b]).abs().max_element() > CONTRAST_THRESHOLD
     };
     (0..w * h)
-        .filter(|&i| {
+        .filter_map(|i| {
             let (x, y) = (i % w, i / w);
-            traces[i].error as f64 > NOISE_THRESHOLD
-                || (x > 0 && differs(i, i - 1))
+            let edge = (x > 0 && differs(i, i - 1))
                 || (x + 1 < w && differs(i, i + 1))
                 || (y > 0 && differs(i, i - w))
-                || (y + 1 < h && differs(i, i + w))
+                || (y + 1 < h && differs(i, i + w));
+            // Samples needed to bring the error under the threshold, relative to the first pass.
+            let need = (traces[i].error as f64 / NOISE_THRESHOLD).powi(2);
+            let factor = if need > 1.0 { (need.ceil() as u32).min(MAX_NESTED_FACTOR) } else { 1 };
+            (edge || factor > 1).then(|| Refinement { index: i, groups: samples.div_ceil(factor) })
         })
         .collect()
 }

@@ -24,10 +24,7 @@ const MEASURED_FRAMES: usize = 25;
 
 fn main() {
     let backend: Backend = std::env::var("RAYTERRA_BENCH_BACKEND")
-        .map(|name| {
-            name.parse()
-                .unwrap_or_else(|error| panic!("RAYTERRA_BENCH_BACKEND: {error}"))
-        })
+        .map(|name| name.parse().unwrap_or_else(|error| panic!("RAYTERRA_BENCH_BACKEND: {error}")))
         .unwrap_or(Backend::Vulkan);
     let gpu = match Gpu::headless(backend) {
         Ok(gpu) => gpu,
@@ -42,8 +39,7 @@ fn main() {
         SIZE.0, SIZE.1
     );
     let config = SceneConfig::default();
-    let course_dir =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/course-assets/terrain");
+    let course_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/course-assets/terrain");
     let mut results = BTreeMap::new();
     let scenes = [
         ("course-island-256", Scene::Course),
@@ -117,10 +113,7 @@ impl Scene {
                 .map_err(|error| eprintln!("course island skipped: {error}"))
                 .ok(),
             &Scene::Procedural(size) => {
-                let options = ProceduralOptions {
-                    seed: 1,
-                    heightmap_size: size,
-                };
+                let options = ProceduralOptions { seed: 1, heightmap_size: size };
                 generate(options, config, &mut |_| {}).ok()
             }
         }
@@ -130,10 +123,7 @@ impl Scene {
 fn compare_with_baseline(results: &BTreeMap<String, f64>) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/frame_time_baseline.txt");
     if std::env::var("RAYTERRA_BENCH_SAVE").is_ok_and(|v| v == "1") {
-        let text: String = results
-            .iter()
-            .map(|(name, ms)| format!("{name} {ms:.2}\n"))
-            .collect();
+        let text: String = results.iter().map(|(name, ms)| format!("{name} {ms:.2}\n")).collect();
         match std::fs::write(&path, text) {
             Ok(()) => println!("baseline saved to {}", path.display()),
             Err(error) => eprintln!("cannot save the baseline {}: {error}", path.display()),
@@ -141,24 +131,17 @@ fn compare_with_baseline(results: &BTreeMap<String, f64>) {
         return;
     }
     let Ok(text) = std::fs::read_to_string(&path) else {
-        println!(
-            "no baseline at {} (RAYTERRA_BENCH_SAVE=1 writes one)",
-            path.display()
-        );
+        println!("no baseline at {} (RAYTERRA_BENCH_SAVE=1 writes one)", path.display());
         return;
     };
     println!("against the baseline (below 1 is faster):");
     for line in text.lines() {
         let mut parts = line.split_whitespace();
-        let (Some(name), Some(Ok(baseline))) = (parts.next(), parts.next().map(str::parse::<f64>))
-        else {
+        let (Some(name), Some(Ok(baseline))) = (parts.next(), parts.next().map(str::parse::<f64>)) else {
             continue;
         };
         if let Some(now) = results.get(name) {
-            println!(
-                "  {name:<20} {now:>8.1} ms / {baseline:>8.1} ms = {:.2}",
-                now / baseline
-            );
+            println!("  {name:<20} {now:>8.1} ms / {baseline:>8.1} ms = {:.2}", now / baseline);
         }
     }
 }

@@ -41,15 +41,8 @@ impl CameraPose {
 
     /// Unit vector the camera looks along.
     pub fn forward(&self) -> Vec3 {
-        let (yaw, pitch) = (
-            self.yaw_degrees.to_radians(),
-            self.pitch_degrees.to_radians(),
-        );
-        Vec3::new(
-            yaw.sin() * pitch.cos(),
-            pitch.sin(),
-            -yaw.cos() * pitch.cos(),
-        )
+        let (yaw, pitch) = (self.yaw_degrees.to_radians(), self.pitch_degrees.to_radians());
+        Vec3::new(yaw.sin() * pitch.cos(), pitch.sin(), -yaw.cos() * pitch.cos())
     }
 
     /// Unit vector to the camera's right, horizontal.
@@ -99,11 +92,7 @@ impl std::str::FromStr for CameraPose {
         if pitch_degrees.abs() > MAX_PITCH_DEGREES {
             return Err(PoseSyntaxError::Pitch(pitch.to_string()));
         }
-        Ok(CameraPose::new(
-            Vec3::new(number(x)?, number(y)?, number(z)?),
-            number(yaw)?,
-            pitch_degrees,
-        ))
+        Ok(CameraPose::new(Vec3::new(number(x)?, number(y)?, number(z)?), number(yaw)?, pitch_degrees))
     }
 }
 
@@ -144,9 +133,7 @@ impl Frustum {
     pub fn from_view_projection(matrix: Mat4) -> Self {
         let (r0, r1, r2, r3) = (matrix.row(0), matrix.row(1), matrix.row(2), matrix.row(3));
         // Gribb and Hartmann: -w <= x <= w, -w <= y <= w, 0 <= z <= w.
-        Self {
-            planes: [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2],
-        }
+        Self { planes: [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2] }
     }
 
     /// Whether the axis-aligned box from `min` to `max` may be visible (conservative: a box near
@@ -179,14 +166,8 @@ pub enum Motion {
 }
 
 impl Motion {
-    const ALL: [Motion; 6] = [
-        Motion::Forward,
-        Motion::Back,
-        Motion::Left,
-        Motion::Right,
-        Motion::Up,
-        Motion::Down,
-    ];
+    const ALL: [Motion; 6] =
+        [Motion::Forward, Motion::Back, Motion::Left, Motion::Right, Motion::Up, Motion::Down];
 
     fn index(self) -> usize {
         self as usize
@@ -234,11 +215,8 @@ pub struct Limits {
 
 impl Limits {
     /// No limits at all.
-    pub const NONE: Limits = Limits {
-        min: Vec3::splat(f32::NEG_INFINITY),
-        max: Vec3::splat(f32::INFINITY),
-        clearance: 0.0,
-    };
+    pub const NONE: Limits =
+        Limits { min: Vec3::splat(f32::NEG_INFINITY), max: Vec3::splat(f32::INFINITY), clearance: 0.0 };
 }
 
 /// The camera a user flies: pose, field of view, velocity and the keys being held.
@@ -331,24 +309,14 @@ impl FlyCamera {
             .filter(|motion| self.held[motion.index()])
             .map(|&motion| direction(motion))
             .sum();
-        let speed = self.settings.max_speed
-            * if self.boost {
-                self.settings.boost_factor
-            } else {
-                1.0
-            };
+        let speed = self.settings.max_speed * if self.boost { self.settings.boost_factor } else { 1.0 };
         wish.normalize_or_zero() * speed
     }
 
     /// Advances the camera by `seconds` (negative or non-finite steps are ignored), then keeps it
     /// within `limits`, `ground(x, z)` giving the terrain height there (`None` off the terrain,
     /// where the ground is `limits.min.y`).
-    pub fn update(
-        &mut self,
-        seconds: f32,
-        limits: &Limits,
-        ground: impl Fn(f32, f32) -> Option<f32>,
-    ) {
+    pub fn update(&mut self, seconds: f32, limits: &Limits, ground: impl Fn(f32, f32) -> Option<f32>) {
         if !(seconds.is_finite() && seconds > 0.0) {
             return;
         }
@@ -365,8 +333,7 @@ impl FlyCamera {
 
     fn keep_within(&mut self, limits: &Limits, ground: impl Fn(f32, f32) -> Option<f32>) {
         let p = self.pose.position;
-        let floor =
-            ground(p.x, p.z).map_or(limits.min.y, |h| h.max(limits.min.y)) + limits.clearance;
+        let floor = ground(p.x, p.z).map_or(limits.min.y, |h| h.max(limits.min.y)) + limits.clearance;
         let min = Vec3::new(limits.min.x, floor.min(limits.max.y), limits.min.z);
         let clamped = p.clamp(min, limits.max);
         // Stop moving into a wall instead of pressing against it.
@@ -384,11 +351,7 @@ mod tests {
     use super::*;
 
     fn camera() -> FlyCamera {
-        FlyCamera::new(
-            CameraPose::new(Vec3::new(0.0, 2.5, 10.0), 0.0, 0.0),
-            45.0,
-            MotionSettings::default(),
-        )
+        FlyCamera::new(CameraPose::new(Vec3::new(0.0, 2.5, 10.0), 0.0, 0.0), 45.0, MotionSettings::default())
     }
 
     fn run(camera: &mut FlyCamera, seconds: f32, steps: u32) {
@@ -414,13 +377,8 @@ mod tests {
     #[test]
     fn frustum_keeps_what_is_in_view() {
         let pose = CameraPose::new(Vec3::new(0.0, 2.0, 10.0), 0.0, 0.0);
-        let lens = Lens {
-            field_of_view_degrees: 45.0,
-            near: 0.1,
-            far: 100.0,
-        };
-        let frustum =
-            Frustum::from_view_projection(lens.projection(16.0 / 9.0) * pose.view_matrix());
+        let lens = Lens { field_of_view_degrees: 45.0, near: 0.1, far: 100.0 };
+        let frustum = Frustum::from_view_projection(lens.projection(16.0 / 9.0) * pose.view_matrix());
         let unit = Vec3::splat(0.5);
         let seen = |centre: Vec3| frustum.intersects_box(centre - unit, centre + unit);
         assert!(seen(Vec3::new(0.0, 2.0, 0.0)), "ahead");
@@ -435,26 +393,11 @@ mod tests {
     #[test]
     fn parses_poses() {
         let pose: CameraPose = "1, 2.5,-3,90,-10".parse().expect("valid");
-        assert_eq!(
-            pose,
-            CameraPose::new(Vec3::new(1.0, 2.5, -3.0), 90.0, -10.0)
-        );
-        assert_eq!(
-            "1,2,3".parse::<CameraPose>(),
-            Err(PoseSyntaxError::Count(3))
-        );
-        assert_eq!(
-            "1,2,3,4,x".parse::<CameraPose>(),
-            Err(PoseSyntaxError::Number("x".into()))
-        );
-        assert_eq!(
-            "1,2,inf,4,0".parse::<CameraPose>(),
-            Err(PoseSyntaxError::Number("inf".into()))
-        );
-        assert_eq!(
-            "0,0,0,0,95".parse::<CameraPose>(),
-            Err(PoseSyntaxError::Pitch("95".into()))
-        );
+        assert_eq!(pose, CameraPose::new(Vec3::new(1.0, 2.5, -3.0), 90.0, -10.0));
+        assert_eq!("1,2,3".parse::<CameraPose>(), Err(PoseSyntaxError::Count(3)));
+        assert_eq!("1,2,3,4,x".parse::<CameraPose>(), Err(PoseSyntaxError::Number("x".into())));
+        assert_eq!("1,2,inf,4,0".parse::<CameraPose>(), Err(PoseSyntaxError::Number("inf".into())));
+        assert_eq!("0,0,0,0,95".parse::<CameraPose>(), Err(PoseSyntaxError::Pitch("95".into())));
     }
 
     #[test]
@@ -504,10 +447,7 @@ mod tests {
         run(&mut coarse, 0.6, 3);
         run(&mut fine, 0.6, 600);
         assert!(
-            coarse
-                .pose()
-                .position
-                .abs_diff_eq(fine.pose().position, 1e-4),
+            coarse.pose().position.abs_diff_eq(fine.pose().position, 1e-4),
             "{:?} vs {:?}",
             coarse.pose().position,
             fine.pose().position
@@ -575,20 +515,13 @@ mod tests {
     #[test]
     fn stays_within_limits_and_above_the_ground() {
         let mut cam = camera();
-        let limits = Limits {
-            min: Vec3::new(-5.0, 0.0, -5.0),
-            max: Vec3::new(5.0, 4.0, 11.0),
-            clearance: 0.2,
-        };
+        let limits =
+            Limits { min: Vec3::new(-5.0, 0.0, -5.0), max: Vec3::new(5.0, 4.0, 11.0), clearance: 0.2 };
         cam.set_held(Motion::Down, true);
         for _ in 0..100 {
             cam.update(0.05, &limits, |x, _| (x.abs() < 1.0).then_some(1.0));
         }
-        assert!(
-            (cam.pose().position.y - 1.2).abs() < 1e-5,
-            "{:?}",
-            cam.pose()
-        );
+        assert!((cam.pose().position.y - 1.2).abs() < 1e-5, "{:?}", cam.pose());
         assert_eq!(cam.velocity().y, 0.0);
         cam.set_held(Motion::Down, false);
         cam.set_held(Motion::Right, true);

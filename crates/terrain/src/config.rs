@@ -111,9 +111,6 @@ mod tests {
         let late = config.water_offset(late_time);
         assert!((0.0..1.0).contains(&late.x) && (0.0..1.0).contains(&late.y));
         let exact = (f64::from(config.wave_velocity.x) * late_time).rem_euclid(1.0);
-        assert!(
-            (f64::from(late.x) - exact).abs() < 1e-6,
-            "{late:?} vs {exact}"
-        );
+        assert!((f64::from(late.x) - exact).abs() < 1e-6, "{late:?} vs {exact}");
     }
 }

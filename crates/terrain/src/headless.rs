@@ -32,20 +32,11 @@ pub struct OffscreenTarget {
 
 impl OffscreenTarget {
     /// A `width` x `height` target of `format` (8-bit RGBA or BGRA).
-    pub fn new(
-        gpu: &Gpu,
-        format: wgpu::TextureFormat,
-        width: u32,
-        height: u32,
-    ) -> Result<Self, RenderError> {
+    pub fn new(gpu: &Gpu, format: wgpu::TextureFormat, width: u32, height: u32) -> Result<Self, RenderError> {
         check_frame_size(gpu, width, height)?;
         let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some("off-screen target"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
+            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -85,11 +76,8 @@ impl OffscreenTarget {
     /// Copies the target's pixels back to the CPU, as RGBA, after all submitted work.
     pub fn read(&self, gpu: &Gpu) -> Result<RgbaImage, RenderError> {
         let (width, height) = self.size;
-        let mut encoder = gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("readback"),
-            });
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
         encoder.copy_texture_to_buffer(
             self.texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
@@ -104,10 +92,9 @@ impl OffscreenTarget {
         );
         gpu.queue.submit([encoder.finish()]);
         let (sender, receiver) = mpsc::channel();
-        self.readback
-            .map_async(wgpu::MapMode::Read, .., move |result| {
-                let _ = sender.send(result);
-            });
+        self.readback.map_async(wgpu::MapMode::Read, .., move |result| {
+            let _ = sender.send(result);
+        });
         gpu.finish()?;
         receiver
             .recv()
@@ -115,10 +102,8 @@ impl OffscreenTarget {
             .map_err(|error| GpuError::Readback(error.to_string()))?;
         let mut pixels = Vec::with_capacity(4 * width as usize * height as usize);
         {
-            let mapped = self
-                .readback
-                .get_mapped_range(..)
-                .map_err(|error| GpuError::Readback(error.to_string()))?;
+            let mapped =
+                self.readback.get_mapped_range(..).map_err(|error| GpuError::Readback(error.to_string()))?;
             for row in mapped.chunks(self.padded_row_bytes as usize) {
                 pixels.extend_from_slice(&row[..4 * width as usize]);
             }
@@ -132,9 +117,8 @@ impl OffscreenTarget {
                 pixel.swap(0, 2);
             }
         }
-        RgbaImage::from_raw(width, height, pixels).ok_or_else(|| {
-            GpuError::Readback("the image read back has the wrong size".into()).into()
-        })
+        RgbaImage::from_raw(width, height, pixels)
+            .ok_or_else(|| GpuError::Readback("the image read back has the wrong size".into()).into())
     }
 }
 
@@ -169,16 +153,14 @@ impl HeadlessRenderer {
     /// Draws `view` and waits for the GPU to finish, without reading the image back (what a
     /// frame costs on screen).
     pub fn draw(&mut self, gpu: &Gpu, view: &FrameView) -> Result<(), RenderError> {
-        self.renderer
-            .draw(gpu, self.target.view(), self.target.size(), view);
+        self.renderer.draw(gpu, self.target.view(), self.target.size(), view);
         gpu.finish()?;
         Ok(())
     }
 
     /// Draws `view` and returns the image.
     pub fn render(&mut self, gpu: &Gpu, view: &FrameView) -> Result<RgbaImage, RenderError> {
-        self.renderer
-            .draw(gpu, self.target.view(), self.target.size(), view);
+        self.renderer.draw(gpu, self.target.view(), self.target.size(), view);
         gpu.check()?;
         self.target.read(gpu)
     }

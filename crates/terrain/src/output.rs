@@ -36,9 +36,7 @@ pub enum SaveError {
 pub fn format_for(path: &Path) -> Result<ImageFormat, SaveError> {
     match ImageFormat::from_path(path) {
         Ok(format @ (ImageFormat::Png | ImageFormat::Bmp | ImageFormat::Jpeg)) => Ok(format),
-        _ => Err(SaveError::UnknownFormat {
-            path: path.to_path_buf(),
-        }),
+        _ => Err(SaveError::UnknownFormat { path: path.to_path_buf() }),
     }
 }
 
@@ -57,31 +55,20 @@ pub fn save_frame(frame: &image::RgbaImage, path: &Path) -> Result<(), SaveError
 /// Writes `image` to `path` in `format`, atomically: the image is encoded into a temporary file
 /// beside `path`, which is then renamed over it.
 pub fn save_image(image: &DynamicImage, path: &Path, format: ImageFormat) -> Result<(), SaveError> {
-    let io_error = |source| SaveError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
+    let io_error = |source| SaveError::Io { path: path.to_path_buf(), source };
     let folder = match path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let name = path.file_name().map_or_else(
-        || "image".into(),
-        |name| name.to_string_lossy().into_owned(),
-    );
+    let name = path.file_name().map_or_else(|| "image".into(), |name| name.to_string_lossy().into_owned());
     let temporary = folder.join(format!(".{name}.{}.tmp", std::process::id()));
     let result = (|| {
         let file = std::fs::File::create(&temporary).map_err(io_error)?;
         let mut writer = std::io::BufWriter::new(file);
         image
             .write_to(&mut writer, format)
-            .map_err(|source| SaveError::Encode {
-                path: path.to_path_buf(),
-                source,
-            })?;
-        let file = writer
-            .into_inner()
-            .map_err(|error| io_error(error.into_error()))?;
+            .map_err(|source| SaveError::Encode { path: path.to_path_buf(), source })?;
+        let file = writer.into_inner().map_err(|error| io_error(error.into_error()))?;
         file.sync_all().map_err(io_error)?;
         std::fs::rename(&temporary, path).map_err(io_error)
     })();
@@ -99,20 +86,13 @@ mod tests {
     fn writes_whole_files_and_leaves_nothing_on_failure() {
         let dir = std::env::temp_dir().join(format!("rayterra-output-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
-        let image = DynamicImage::ImageRgba8(image::RgbaImage::from_pixel(
-            3,
-            2,
-            image::Rgba([1, 2, 3, 255]),
-        ));
+        let image = DynamicImage::ImageRgba8(image::RgbaImage::from_pixel(3, 2, image::Rgba([1, 2, 3, 255])));
         let path = dir.join("shot.png");
         save_image(&image, &path, ImageFormat::Png).expect("writable");
         let back = image::open(&path).expect("readable").into_rgba8();
         assert_eq!(back.get_pixel(2, 1).0, [1, 2, 3, 255]);
         // Only the image is left in the folder: no temporary file.
-        let names: Vec<_> = std::fs::read_dir(&dir)
-            .expect("dir")
-            .filter_map(Result::ok)
-            .collect();
+        let names: Vec<_> = std::fs::read_dir(&dir).expect("dir").filter_map(Result::ok).collect();
         assert_eq!(names.len(), 1);
         // A folder that does not exist is an error naming the file.
         let missing = dir.join("no-such-folder").join("shot.png");
@@ -125,18 +105,9 @@ mod tests {
     fn format_follows_the_extension() {
         assert_eq!(format_for(Path::new("a.bmp")).ok(), Some(ImageFormat::Bmp));
         assert_eq!(format_for(Path::new("a.PNG")).ok(), Some(ImageFormat::Png));
-        assert_eq!(
-            format_for(Path::new("a.jpeg")).ok(),
-            Some(ImageFormat::Jpeg)
-        );
-        assert!(matches!(
-            format_for(Path::new("a")),
-            Err(SaveError::UnknownFormat { .. })
-        ));
-        assert!(matches!(
-            format_for(Path::new("a.txt")),
-            Err(SaveError::UnknownFormat { .. })
-        ));
+        assert_eq!(format_for(Path::new("a.jpeg")).ok(), Some(ImageFormat::Jpeg));
+        assert!(matches!(format_for(Path::new("a")), Err(SaveError::UnknownFormat { .. })));
+        assert!(matches!(format_for(Path::new("a.txt")), Err(SaveError::UnknownFormat { .. })));
     }
 
     #[test]

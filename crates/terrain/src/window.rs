@@ -95,12 +95,7 @@ impl From<GpuError> for WindowError {
 /// Whether a display server seems to be available (on Linux and BSD: `DISPLAY`,
 /// `WAYLAND_DISPLAY` or `WAYLAND_SOCKET` is set; elsewhere always).
 pub fn display_available() -> bool {
-    if cfg!(all(
-        unix,
-        not(target_os = "macos"),
-        not(target_os = "ios"),
-        not(target_os = "android")
-    )) {
+    if cfg!(all(unix, not(target_os = "macos"), not(target_os = "ios"), not(target_os = "android"))) {
         ["DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET"]
             .iter()
             .any(|name| std::env::var_os(name).is_some_and(|value| !value.is_empty()))
@@ -118,20 +113,14 @@ pub fn run(
     notice: &mut dyn FnMut(Notice),
 ) -> Result<WindowSummary, WindowError> {
     if !display_available() {
-        return Err(WindowError::NoDisplay(
-            "neither DISPLAY nor WAYLAND_DISPLAY is set".into(),
-        ));
+        return Err(WindowError::NoDisplay("neither DISPLAY nor WAYLAND_DISPLAY is set".into()));
     }
     let event_loop = EventLoop::new().map_err(|error| match error {
         winit::error::EventLoopError::Os(os) => WindowError::NoDisplay(os.to_string()),
         other => WindowError::System(other.to_string()),
     })?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let camera = FlyCamera::new(
-        options.pose,
-        options.field_of_view_degrees,
-        MotionSettings::default(),
-    );
+    let camera = FlyCamera::new(options.pose, options.field_of_view_degrees, MotionSettings::default());
     let mut app = App {
         world,
         config,
@@ -152,9 +141,7 @@ pub fn run(
         title_since: Instant::now(),
         screenshots_taken: 0,
     };
-    event_loop
-        .run_app(&mut app)
-        .map_err(|error| WindowError::System(error.to_string()))?;
+    event_loop.run_app(&mut app).map_err(|error| WindowError::System(error.to_string()))?;
     match app.error {
         Some(error) => Err(error),
         None => Ok(WindowSummary {
@@ -208,18 +195,12 @@ impl App<'_> {
 
     fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<Running, WindowError> {
         let (width, height) = self.options.size;
-        let attributes = Window::default_attributes()
-            .with_title(TITLE)
-            .with_inner_size(PhysicalSize::new(width, height));
+        let attributes =
+            Window::default_attributes().with_title(TITLE).with_inner_size(PhysicalSize::new(width, height));
         let window = Arc::new(
-            event_loop
-                .create_window(attributes)
-                .map_err(|error| WindowError::System(error.to_string()))?,
+            event_loop.create_window(attributes).map_err(|error| WindowError::System(error.to_string()))?,
         );
-        let instance = Gpu::instance(
-            self.options.backend,
-            Some(Box::new(event_loop.owned_display_handle())),
-        );
+        let instance = Gpu::instance(self.options.backend, Some(Box::new(event_loop.owned_display_handle())));
         let surface = instance
             .create_surface(Arc::clone(&window))
             .map_err(|error| WindowError::Surface(error.to_string()))?;
@@ -238,11 +219,8 @@ impl App<'_> {
                 WindowError::Surface(format!("{} cannot present to this window", gpu.describe()))
             })?;
         let view_format = format.remove_srgb_suffix();
-        let present_mode = if self.options.vsync {
-            wgpu::PresentMode::AutoVsync
-        } else {
-            wgpu::PresentMode::AutoNoVsync
-        };
+        let present_mode =
+            if self.options.vsync { wgpu::PresentMode::AutoVsync } else { wgpu::PresentMode::AutoNoVsync };
         let size = window.inner_size();
         let surface_config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
@@ -252,26 +230,12 @@ impl App<'_> {
             height: size.height.max(1),
             present_mode,
             desired_maximum_frame_latency: 2,
-            alpha_mode: capabilities
-                .alpha_modes
-                .first()
-                .copied()
-                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
-            view_formats: if view_format == format {
-                Vec::new()
-            } else {
-                vec![view_format]
-            },
+            alpha_mode: capabilities.alpha_modes.first().copied().unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats: if view_format == format { Vec::new() } else { vec![view_format] },
         };
         surface.configure(&gpu.device, &surface_config);
         let renderer = Renderer::new(&gpu, self.world, self.config, view_format)?;
-        Ok(Running {
-            window,
-            surface,
-            surface_config,
-            gpu,
-            renderer,
-        })
+        Ok(Running { window, surface, surface_config, gpu, renderer })
     }
 
     /// Turns mouse look on (`captured`) or off. Grabbing and hiding the cursor is best effort:
@@ -323,9 +287,7 @@ impl App<'_> {
             KeyCode::F11 => {
                 if let Some(running) = &self.running {
                     let full = running.window.fullscreen().is_some();
-                    running
-                        .window
-                        .set_fullscreen((!full).then_some(Fullscreen::Borderless(None)));
+                    running.window.set_fullscreen((!full).then_some(Fullscreen::Borderless(None)));
                 }
             }
             _ => {}
@@ -347,19 +309,10 @@ impl App<'_> {
         };
         let size = (running.surface_config.width, running.surface_config.height);
         let result = (|| -> Result<PathBuf, String> {
-            let target = OffscreenTarget::new(
-                &running.gpu,
-                running.renderer.target_format(),
-                size.0,
-                size.1,
-            )
-            .map_err(|error| error.to_string())?;
-            running
-                .renderer
-                .draw(&running.gpu, target.view(), size, &view);
-            let image = target
-                .read(&running.gpu)
+            let target = OffscreenTarget::new(&running.gpu, running.renderer.target_format(), size.0, size.1)
                 .map_err(|error| error.to_string())?;
+            running.renderer.draw(&running.gpu, target.view(), size, &view);
+            let image = target.read(&running.gpu).map_err(|error| error.to_string())?;
             let path = free_screenshot_path(&self.options.screenshot_dir, self.screenshots_taken);
             save_image(&image.into(), &path, image::ImageFormat::Png)
                 .map_err(|error: SaveError| error.to_string())?;
@@ -377,38 +330,29 @@ impl App<'_> {
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
         let now = Instant::now();
         // Long stalls (a window drag, a breakpoint) do not turn into a leap of the camera.
-        let step = self
-            .last_frame
-            .map_or(Duration::ZERO, |last| now - last)
-            .min(Duration::from_millis(250));
+        let step = self.last_frame.map_or(Duration::ZERO, |last| now - last).min(Duration::from_millis(250));
         self.last_frame = Some(now);
         self.first_frame.get_or_insert(now);
         let limits = self.config.camera_limits();
         let ground = &self.ground;
-        self.camera
-            .update(step.as_secs_f32(), &limits, |x, z| ground.height_at(x, z));
+        self.camera.update(step.as_secs_f32(), &limits, |x, z| ground.height_at(x, z));
         let view = self.view();
         let Some(running) = &mut self.running else {
             return;
         };
         let frame = match running.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(frame)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => frame,
+            wgpu::CurrentSurfaceTexture::Success(frame) | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => {
+                frame
+            }
             wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => return,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                running
-                    .surface
-                    .configure(&running.gpu.device, &running.surface_config);
+                running.surface.configure(&running.gpu.device, &running.surface_config);
                 return;
             }
             wgpu::CurrentSurfaceTexture::Validation => {
-                let error = running
-                    .gpu
-                    .check()
-                    .err()
-                    .unwrap_or_else(|| GpuError::Reported {
-                        messages: vec!["the window's surface could not be acquired".into()],
-                    });
+                let error = running.gpu.check().err().unwrap_or_else(|| GpuError::Reported {
+                    messages: vec!["the window's surface could not be acquired".into()],
+                });
                 self.fail(event_loop, error.into());
                 return;
             }
@@ -428,11 +372,7 @@ impl App<'_> {
         self.frames += 1;
         self.last_frame_end = Some(Instant::now());
         self.update_title();
-        if self
-            .options
-            .max_frames
-            .is_some_and(|max| self.frames >= max)
-        {
+        if self.options.max_frames.is_some_and(|max| self.frames >= max) {
             event_loop.exit();
         }
     }
@@ -445,11 +385,8 @@ impl App<'_> {
         }
         if let Some(running) = &self.running {
             let milliseconds = elapsed.as_secs_f64() * 1000.0 / f64::from(self.title_frames);
-            let hint = if self.mouse_captured {
-                "Tab releases the mouse"
-            } else {
-                "click or Tab to look around"
-            };
+            let hint =
+                if self.mouse_captured { "Tab releases the mouse" } else { "click or Tab to look around" };
             running.window.set_title(&format!(
                 "{TITLE} - {milliseconds:.1} ms/frame ({:.0} fps) - {hint}",
                 1000.0 / milliseconds
@@ -492,9 +429,7 @@ impl ApplicationHandler for App<'_> {
                 {
                     running.surface_config.width = size.width;
                     running.surface_config.height = size.height;
-                    running
-                        .surface
-                        .configure(&running.gpu.device, &running.surface_config);
+                    running.surface.configure(&running.gpu.device, &running.surface_config);
                 }
             }
             WindowEvent::Focused(false) => {
@@ -505,11 +440,11 @@ impl ApplicationHandler for App<'_> {
             }
             WindowEvent::Focused(true) if self.capture_on_focus => self.set_mouse_captured(true),
             WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
-            WindowEvent::MouseInput {
-                state: ElementState::Pressed,
-                button: MouseButton::Left,
-                ..
-            } if !self.mouse_captured => self.set_mouse_captured(true),
+            WindowEvent::MouseInput { state: ElementState::Pressed, button: MouseButton::Left, .. }
+                if !self.mouse_captured =>
+            {
+                self.set_mouse_captured(true)
+            }
             WindowEvent::MouseWheel { delta, .. } => {
                 let lines = match delta {
                     MouseScrollDelta::LineDelta(_, y) => y,
@@ -546,14 +481,8 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("rayterra-shots-{}", std::process::id()));
         std::fs::create_dir_all(&dir).expect("temp dir");
         std::fs::write(dir.join("rayterra-terrain-001.png"), b"taken").expect("write");
-        assert_eq!(
-            free_screenshot_path(&dir, 0),
-            dir.join("rayterra-terrain-002.png")
-        );
-        assert_eq!(
-            free_screenshot_path(&dir, 4),
-            dir.join("rayterra-terrain-005.png")
-        );
+        assert_eq!(free_screenshot_path(&dir, 0), dir.join("rayterra-terrain-002.png"));
+        assert_eq!(free_screenshot_path(&dir, 4), dir.join("rayterra-terrain-005.png"));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

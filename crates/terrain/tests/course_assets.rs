@@ -21,28 +21,16 @@ fn course_world() -> Option<World> {
 #[test]
 fn loads_the_course_folder() {
     let Some(world) = course_world() else { return };
-    assert_eq!(
-        (world.heightmap.columns(), world.heightmap.rows()),
-        (256, 256)
-    );
+    assert_eq!((world.heightmap.columns(), world.heightmap.rows()), (256, 256));
     assert_eq!(world.colour_map.dimensions(), (512, 512));
     assert_eq!(world.detail_map.dimensions(), (512, 512));
-    assert!(
-        world
-            .sky
-            .faces()
-            .iter()
-            .all(|face| face.dimensions() == (256, 256))
-    );
+    assert!(world.sky.faces().iter().all(|face| face.dimensions() == (256, 256)));
     assert_eq!(world.water.dimensions(), (128, 128));
     // About a third of the island is under water (spec section 2).
     let config = SceneConfig::default();
     let levels = world.heightmap.levels();
-    let under = levels
-        .iter()
-        .filter(|&&l| config.height_of_level(l) < 0.0)
-        .count() as f32
-        / levels.len() as f32;
+    let under =
+        levels.iter().filter(|&&l| config.height_of_level(l) < 0.0).count() as f32 / levels.len() as f32;
     assert!((0.28..0.38).contains(&under), "{under}");
 }
 
@@ -74,10 +62,7 @@ fn the_starting_view_has_sky_above_and_the_island_below() {
             p[2] < p[0].max(p[1]) + 20
         })
         .count();
-    assert!(
-        land > SIZE.0 as usize * 3 / 4,
-        "only {land} land pixels on the bottom row"
-    );
+    assert!(land > SIZE.0 as usize * 3 / 4, "only {land} land pixels on the bottom row");
 }
 
 #[test]
@@ -129,10 +114,8 @@ fn land_and_water_where_the_heightmap_puts_them() {
             };
             let p = image.get_pixel(x, y).0;
             let pixel = [0, 1, 2].map(|c| f64::from(p[c]));
-            let (to_land, to_water) = (
-                distance(pixel, colour_at(point.x, point.z)),
-                distance(pixel, expected_water),
-            );
+            let (to_land, to_water) =
+                (distance(pixel, colour_at(point.x, point.z)), distance(pixel, expected_water));
             if heights.iter().all(|&h| h > 0.05) {
                 land_total += 1;
                 land_right += usize::from(to_land < to_water);
@@ -143,14 +126,8 @@ fn land_and_water_where_the_heightmap_puts_them() {
         }
     }
     eprintln!("land {land_right}/{land_total}, water {water_right}/{water_total}");
-    assert!(
-        land_total > 200 && water_total > 100,
-        "too few cells sampled"
-    );
-    assert!(
-        land_right * 100 >= land_total * 90,
-        "land looks like land at {land_right}/{land_total} cells"
-    );
+    assert!(land_total > 200 && water_total > 100, "too few cells sampled");
+    assert!(land_right * 100 >= land_total * 90, "land looks like land at {land_right}/{land_total} cells");
     assert!(
         water_right * 100 >= water_total * 90,
         "water looks like water at {water_right}/{water_total} cells"

@@ -25,12 +25,7 @@ fn eight_bit_png_and_bmp_of_odd_sizes() {
             let path = scratch(&format!("ramp-{columns}x{rows}.{extension}"));
             image.save(&path).expect("write");
             let map = Heightmap::load(&path).expect("loads");
-            assert_eq!(
-                (map.columns(), map.rows()),
-                (columns, rows),
-                "{}",
-                path.display()
-            );
+            assert_eq!((map.columns(), map.rows()), (columns, rows), "{}", path.display());
             for (x, y) in [(0, 0), (columns - 1, rows - 1), (columns / 2, rows / 3)] {
                 let expected = f32::from(image.get_pixel(x, y).0[0]);
                 assert_eq!(map.level(y, x), expected, "{} at {x},{y}", path.display());
@@ -58,23 +53,14 @@ fn a_colour_image_reads_as_its_luminance() {
     let path = scratch("grey-rgb.jpg");
     image.save(&path).expect("write");
     let map = Heightmap::load(&path).expect("loads");
-    assert!(
-        (map.level(0, 3) - 150.0).abs() <= 3.0,
-        "{}",
-        map.level(0, 3)
-    );
+    assert!((map.level(0, 3) - 150.0).abs() <= 3.0, "{}", map.level(0, 3));
 }
 
 #[test]
 fn broken_files_are_errors_naming_the_file() {
     let truncated = scratch("truncated.png");
     let mut bytes = Vec::new();
-    ramp8(64, 64)
-        .write_to(
-            &mut std::io::Cursor::new(&mut bytes),
-            image::ImageFormat::Png,
-        )
-        .expect("encode");
+    ramp8(64, 64).write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).expect("encode");
     std::fs::write(&truncated, &bytes[..bytes.len() / 2]).expect("write");
     let empty = scratch("empty.bmp");
     std::fs::write(&empty, b"").expect("write");
@@ -83,10 +69,7 @@ fn broken_files_are_errors_naming_the_file() {
     for path in [&truncated, &empty, &text] {
         let error = Heightmap::load(path).expect_err("broken");
         assert!(matches!(error, WorldError::Decode { .. }), "{error}");
-        assert!(
-            error.to_string().contains(path.to_str().unwrap_or("?")),
-            "{error}"
-        );
+        assert!(error.to_string().contains(path.to_str().unwrap_or("?")), "{error}");
     }
     let missing = scratch("missing.png");
     let error = Heightmap::load(&missing).expect_err("missing");
@@ -98,18 +81,9 @@ fn too_small_images_are_refused() {
     let path = scratch("line.png");
     ramp8(1, 5).save(&path).expect("write");
     match Heightmap::load(&path) {
-        Err(WorldError::BadHeightmap {
-            path: named,
-            problem,
-        }) => {
+        Err(WorldError::BadHeightmap { path: named, problem }) => {
             assert_eq!(named, path);
-            assert_eq!(
-                problem,
-                HeightmapError::TooSmall {
-                    columns: 1,
-                    rows: 5
-                }
-            );
+            assert_eq!(problem, HeightmapError::TooSmall { columns: 1, rows: 5 });
         }
         other => panic!("expected a bad-heightmap error, got {other:?}"),
     }

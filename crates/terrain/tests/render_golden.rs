@@ -16,12 +16,7 @@ const SIZE: (u32, u32) = (320, 180);
 fn island() -> &'static World {
     static WORLD: OnceLock<World> = OnceLock::new();
     WORLD.get_or_init(|| {
-        generate(
-            ProceduralOptions::default(),
-            &SceneConfig::default(),
-            &mut |_| {},
-        )
-        .expect("default world")
+        generate(ProceduralOptions::default(), &SceneConfig::default(), &mut |_| {}).expect("default world")
     })
 }
 
@@ -30,10 +25,7 @@ fn the_starting_view() {
     let Some(gpu) = gpu(Backend::Vulkan) else {
         return;
     };
-    assert_golden(
-        "island-start",
-        &render(gpu, island(), SIZE, &start_view(0.0)),
-    );
+    assert_golden("island-start", &render(gpu, island(), SIZE, &start_view(0.0)));
 }
 
 #[test]

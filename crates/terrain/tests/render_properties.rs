@@ -55,10 +55,7 @@ fn the_water_mirrors_the_terrain_and_the_sky() {
     // The land's top seen directly, and its mirror image below the waterline.
     assert!(near(at(&image, &view, [5.0, 1.2, 0.0]), [255, 0, 0], 2));
     let reflection = at(&image, &view, [5.0, -1.2, 0.0]);
-    assert!(
-        near(reflection, WATER_OVER_LAND, 3),
-        "mirrored land {reflection:?}"
-    );
+    assert!(near(reflection, WATER_OVER_LAND, 3), "mirrored land {reflection:?}");
     // Looking away from the land, the water shows the mirrored sky.
     let view = view_from([-8.0, 0.5, 0.0], 270.0, -10.0);
     let image = render(gpu, &marker_world(128), SIZE, &view);
@@ -87,13 +84,14 @@ fn detail_is_added_signed() {
 /// The marker world with a water texture of vertical stripes, so its drift shows.
 fn striped_water_world() -> terrain::world::World {
     let mut world = marker_world(128);
-    world.water = RgbaImage::from_fn(32, 32, |x, _| {
-        if x < 16 {
-            Rgba([0, 0, 255, 255])
-        } else {
-            Rgba([0, 0, 40, 255])
-        }
-    });
+    world.water =
+        RgbaImage::from_fn(
+            32,
+            32,
+            |x, _| {
+                if x < 16 { Rgba([0, 0, 255, 255]) } else { Rgba([0, 0, 40, 255]) }
+            },
+        );
     world
 }
 
@@ -108,15 +106,9 @@ fn the_water_drifts_with_time_and_only_the_water() {
     view.time_seconds = 10.0;
     let later = render(gpu, &world, SIZE, &view);
     let land = project(&still, &view, [5.0, 1.2, 0.0]).expect("on screen");
-    assert_eq!(
-        still.get_pixel(land.0, land.1),
-        later.get_pixel(land.0, land.1),
-        "the land moved"
-    );
+    assert_eq!(still.get_pixel(land.0, land.1), later.get_pixel(land.0, land.1), "the land moved");
     let sea = project(&still, &view, [-5.0, 0.0, 0.0]).expect("on screen");
-    let changed = (0..SIZE.1)
-        .filter(|&y| still.get_pixel(sea.0, y) != later.get_pixel(sea.0, y))
-        .count();
+    let changed = (0..SIZE.1).filter(|&y| still.get_pixel(sea.0, y) != later.get_pixel(sea.0, y)).count();
     assert!(changed > 10, "only {changed} water pixels changed in 10 s");
     // The drift is 0.02 texture repeats a second: after 50 s the texture has moved by exactly
     // one repeat and looks as it did at the start, however the frames were spaced.
@@ -134,10 +126,7 @@ fn gl_and_vulkan_draw_the_same_picture() {
     let Some(gl) = gpu(Backend::Gl) else { return };
     let world = striped_water_world();
     let view = view_from([-8.0, 1.5, 6.0], 120.0, -12.0);
-    let (d, _) = common::difference(
-        &render(vulkan, &world, SIZE, &view),
-        &render(gl, &world, SIZE, &view),
-    );
+    let (d, _) = common::difference(&render(vulkan, &world, SIZE, &view), &render(gl, &world, SIZE, &view));
     assert!(d.mean < 0.5 && d.outliers < 0.01, "{d:?}");
 }
 
@@ -151,8 +140,7 @@ fn a_bgra_target_reads_back_as_rgba() {
     let view = view_from([-8.0, 1.5, 6.0], 120.0, -12.0);
     let expected = render(gpu, &world, SIZE, &view);
     let format = wgpu::TextureFormat::Bgra8Unorm;
-    let mut renderer =
-        Renderer::new(gpu, &world, &SceneConfig::default(), format).expect("renderer");
+    let mut renderer = Renderer::new(gpu, &world, &SceneConfig::default(), format).expect("renderer");
     let target = OffscreenTarget::new(gpu, format, SIZE.0, SIZE.1).expect("target");
     renderer.draw(gpu, target.view(), SIZE, &view);
     let image = target.read(gpu).expect("read back");

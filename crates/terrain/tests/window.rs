@@ -37,16 +37,8 @@ fn main() {
 fn rerun_under_xvfb() {
     let exe = std::env::current_exe().expect("own path");
     eprintln!("no display: running the window test under xvfb-run -a");
-    match Command::new("xvfb-run")
-        .arg("-a")
-        .arg(&exe)
-        .env(INNER, "1")
-        .status()
-    {
-        Ok(status) => assert!(
-            status.success(),
-            "the window test failed under xvfb-run: {status}"
-        ),
+    match Command::new("xvfb-run").arg("-a").arg(&exe).env(INNER, "1").status() {
+        Ok(status) => assert!(status.success(), "the window test failed under xvfb-run: {status}"),
         Err(error) => {
             let reason = format!("cannot run xvfb-run ({error}); install xvfb and xauth");
             assert!(!under_ci(), "CI=true, so this cannot be skipped: {reason}");
@@ -57,10 +49,7 @@ fn rerun_under_xvfb() {
 
 fn opens_draws_and_closes() {
     let config = SceneConfig::default();
-    let options = ProceduralOptions {
-        seed: 1,
-        heightmap_size: 64,
-    };
+    let options = ProceduralOptions { seed: 1, heightmap_size: 64 };
     let world = generate(options, &config, &mut |_| {}).expect("world");
     let frames = 5;
     let window_options = WindowOptions {

@@ -27,11 +27,7 @@ impl FrameView {
     /// World-to-clip matrix for a target of aspect width / height, with `near` and `far`
     /// clipping distances in world units.
     pub fn view_projection(&self, aspect: f32, near: f32, far: f32) -> Mat4 {
-        let lens = Lens {
-            field_of_view_degrees: self.field_of_view_degrees,
-            near,
-            far,
-        };
+        let lens = Lens { field_of_view_degrees: self.field_of_view_degrees, near, far };
         lens.projection(aspect) * self.pose.view_matrix()
     }
 }
@@ -40,13 +36,7 @@ impl Renderer {
     /// Draws `view` into `target` (of this renderer's format and `size` pixels) and submits the
     /// work. Drawing order: sky, mirrored sky, terrain, mirrored terrain, water. GPU errors are
     /// collected by the [`super::Gpu`]; check them with [`super::Gpu::check`].
-    pub fn draw(
-        &mut self,
-        gpu: &super::Gpu,
-        target: &wgpu::TextureView,
-        size: (u32, u32),
-        view: &FrameView,
-    ) {
+    pub fn draw(&mut self, gpu: &super::Gpu, target: &wgpu::TextureView, size: (u32, u32), view: &FrameView) {
         let config = &self.config;
         let aspect = size.0.max(1) as f32 / size.1.max(1) as f32;
         let view_projection = view.view_projection(aspect, config.near, config.far);
@@ -63,18 +53,14 @@ impl Renderer {
         self.land.prepare(&gpu.queue, [&lod(false), &lod(true)]);
         for (mirrored, buffer) in [false, true].into_iter().zip(&self.frame_buffers) {
             let uniforms = FrameUniforms::new(view_projection, mirrored, water_offset);
-            gpu.queue
-                .write_buffer(buffer, 0, bytemuck::bytes_of(&uniforms));
+            gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&uniforms));
         }
         if self.depth.as_ref().map(DepthBuffer::size) != Some(size) {
             self.depth = Some(DepthBuffer::new(&gpu.device, size));
         }
         let Some(depth) = &self.depth else { return };
-        let mut encoder = gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame"),
-            });
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("scene"),

@@ -21,13 +21,8 @@ pub enum Backend {
 
 impl Backend {
     /// Every choice, in the order a help text lists them.
-    pub const ALL: [Backend; 5] = [
-        Backend::Auto,
-        Backend::Vulkan,
-        Backend::Gl,
-        Backend::Metal,
-        Backend::Dx12,
-    ];
+    pub const ALL: [Backend; 5] =
+        [Backend::Auto, Backend::Vulkan, Backend::Gl, Backend::Metal, Backend::Dx12];
 
     /// The wgpu backends this choice allows.
     pub fn backends(self) -> wgpu::Backends {
@@ -62,16 +57,10 @@ impl FromStr for Backend {
     type Err = String;
 
     fn from_str(text: &str) -> Result<Self, Self::Err> {
-        Backend::ALL
-            .into_iter()
-            .find(|backend| backend.name().eq_ignore_ascii_case(text))
-            .ok_or_else(|| {
-                let names: Vec<_> = Backend::ALL.iter().map(|b| b.name()).collect();
-                format!(
-                    "unknown backend `{text}` (expected one of: {})",
-                    names.join(", ")
-                )
-            })
+        Backend::ALL.into_iter().find(|backend| backend.name().eq_ignore_ascii_case(text)).ok_or_else(|| {
+            let names: Vec<_> = Backend::ALL.iter().map(|b| b.name()).collect();
+            format!("unknown backend `{text}` (expected one of: {})", names.join(", "))
+        })
     }
 }
 
@@ -158,10 +147,7 @@ impl Gpu {
             compatible_surface: surface,
             apply_limit_buckets: false,
         }))
-        .map_err(|error| GpuError::NoAdapter {
-            backend,
-            reason: error.to_string(),
-        })?;
+        .map_err(|error| GpuError::NoAdapter { backend, reason: error.to_string() })?;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("rayterra terrain"),
             required_features: wgpu::Features::empty(),
@@ -170,10 +156,7 @@ impl Gpu {
             memory_hints: wgpu::MemoryHints::Performance,
             trace: wgpu::Trace::Off,
         }))
-        .map_err(|source| GpuError::Device {
-            adapter: describe(&adapter.get_info()),
-            source,
-        })?;
+        .map_err(|source| GpuError::Device { adapter: describe(&adapter.get_info()), source })?;
         let errors = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&errors);
         device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
@@ -181,14 +164,7 @@ impl Gpu {
                 list.push(error.to_string());
             }
         }));
-        Ok(Self {
-            instance,
-            adapter,
-            device,
-            queue,
-            backend,
-            errors,
-        })
+        Ok(Self { instance, adapter, device, queue, backend, errors })
     }
 
     /// The backend this device was asked for.
@@ -212,11 +188,7 @@ impl Gpu {
             Ok(mut list) => std::mem::take(&mut *list),
             Err(poisoned) => std::mem::take(&mut *poisoned.into_inner()),
         };
-        if messages.is_empty() {
-            Ok(())
-        } else {
-            Err(GpuError::Reported { messages })
-        }
+        if messages.is_empty() { Ok(()) } else { Err(GpuError::Reported { messages }) }
     }
 
     /// Blocks until the GPU has finished all submitted work, then reports its errors.
@@ -227,15 +199,8 @@ impl Gpu {
 }
 
 fn describe(info: &wgpu::AdapterInfo) -> String {
-    let driver = if info.driver_info.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", info.driver_info)
-    };
-    format!(
-        "{}{driver} [{:?}, {:?}]",
-        info.name, info.backend, info.device_type
-    )
+    let driver = if info.driver_info.is_empty() { String::new() } else { format!(" ({})", info.driver_info) };
+    format!("{}{driver} [{:?}, {:?}]", info.name, info.backend, info.device_type)
 }
 
 #[cfg(test)]

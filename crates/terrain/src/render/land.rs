@@ -129,11 +129,7 @@ impl LandPass {
             indices,
             bind_group,
             // Keep the chunk table only: the geometry now lives on the GPU.
-            chunks: TerrainMesh {
-                positions: Vec::new(),
-                indices: Vec::new(),
-                chunks: mesh.chunks,
-            },
+            chunks: TerrainMesh { positions: Vec::new(), indices: Vec::new(), chunks: mesh.chunks },
             indirect,
             multi_draw,
             chosen: [Vec::new(), Vec::new()],
@@ -179,11 +175,7 @@ impl LandPass {
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
         if self.multi_draw {
-            pass.multi_draw_indexed_indirect(
-                &self.indirect,
-                self.slot_offset(slot),
-                chosen.len() as u32,
-            );
+            pass.multi_draw_indexed_indirect(&self.indirect, self.slot_offset(slot), chosen.len() as u32);
         } else {
             for range in chosen {
                 let indices = range.first_index..range.first_index + range.index_count;
@@ -194,11 +186,6 @@ impl LandPass {
 
     /// Triangles drawn by the direct and mirrored passes of the current frame (skirts included).
     pub fn triangles_chosen(&self) -> [u64; 2] {
-        [0, 1].map(|slot| {
-            self.chosen[slot]
-                .iter()
-                .map(|range| u64::from(range.index_count) / 3)
-                .sum()
-        })
+        [0, 1].map(|slot| self.chosen[slot].iter().map(|range| u64::from(range.index_count) / 3).sum())
     }
 }

@@ -39,9 +39,7 @@ pub enum RenderError {
         max: u32,
     },
     /// The terrain mesh does not fit in one GPU buffer.
-    #[error(
-        "a {columns}x{rows} heightmap needs a {bytes}-byte buffer; this GPU allows at most {max} bytes"
-    )]
+    #[error("a {columns}x{rows} heightmap needs a {bytes}-byte buffer; this GPU allows at most {max} bytes")]
     MeshSize {
         /// Heightmap columns.
         columns: u32,
@@ -53,9 +51,7 @@ pub enum RenderError {
         max: u64,
     },
     /// A frame size the GPU cannot render.
-    #[error(
-        "cannot render a {width}x{height} image: sides must be between 1 and {max} pixels on this GPU"
-    )]
+    #[error("cannot render a {width}x{height} image: sides must be between 1 and {max} pixels on this GPU")]
     FrameSize {
         /// Requested width.
         width: u32,
@@ -113,17 +109,10 @@ impl Renderer {
                 }],
             })
         });
-        let context = pipeline::PassContext {
-            device,
-            queue: &gpu.queue,
-            frame_layout: &frame_layout,
-            target_format,
-        };
-        let multi_draw = gpu
-            .adapter
-            .get_downlevel_capabilities()
-            .flags
-            .contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
+        let context =
+            pipeline::PassContext { device, queue: &gpu.queue, frame_layout: &frame_layout, target_format };
+        let multi_draw =
+            gpu.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
         let sky = SkyPass::new(&context, &world.sky, config)?;
         let land = LandPass::new(&context, world, config, multi_draw)?;
         let water = WaterPass::new(&context, &world.water, config)?;

@@ -44,11 +44,7 @@ pub struct PipelinePair {
 impl PipelinePair {
     /// The pipeline for the direct (`mirrored = false`) or mirrored pass.
     pub fn get(&self, mirrored: bool) -> &wgpu::RenderPipeline {
-        if mirrored {
-            &self.mirrored
-        } else {
-            &self.direct
-        }
+        if mirrored { &self.mirrored } else { &self.direct }
     }
 }
 
@@ -179,12 +175,7 @@ pub fn bind_group(
                     wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
                 ),
             };
-            wgpu::BindGroupLayoutEntry {
-                binding: binding as u32,
-                visibility,
-                ty,
-                count: None,
-            }
+            wgpu::BindGroupLayoutEntry { binding: binding as u32, visibility, ty, count: None }
         })
         .collect();
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {

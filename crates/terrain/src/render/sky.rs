@@ -34,11 +34,7 @@ pub struct SkyPass {
 impl SkyPass {
     /// Uploads `sky` (faces of different sizes are resampled to the front wall's size) and builds
     /// the box of `config`.
-    pub fn new(
-        context: &PassContext<'_>,
-        sky: &SkyBox,
-        config: &SceneConfig,
-    ) -> Result<Self, RenderError> {
+    pub fn new(context: &PassContext<'_>, sky: &SkyBox, config: &SceneConfig) -> Result<Self, RenderError> {
         let device = context.device;
         let faces = sky.faces();
         let (width, height) = faces[0].dimensions();
@@ -48,12 +44,7 @@ impl SkyPass {
                 if face.dimensions() == (width, height) {
                     (*face).clone()
                 } else {
-                    image::imageops::resize(
-                        *face,
-                        width,
-                        height,
-                        image::imageops::FilterType::Triangle,
-                    )
+                    image::imageops::resize(*face, width, height, image::imageops::FilterType::Triangle)
                 }
             })
             .collect();
@@ -66,10 +57,7 @@ impl SkyPass {
         let (layout, bind_group) = bind_group(
             device,
             "sky",
-            &[
-                Binding::TextureArray(&view),
-                Binding::Sampler(&sampler(device, false)),
-            ],
+            &[Binding::TextureArray(&view), Binding::Sampler(&sampler(device, false))],
         );
         let (vertices, indices) = box_mesh(config);
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Uint32];
@@ -152,10 +140,7 @@ mod tests {
             let p = |i: u16| Vec3::from_array(vertices[i as usize].position);
             let (a, b, c) = (p(triangle[0]), p(triangle[1]), p(triangle[2]));
             let normal = (b - a).cross(c - a);
-            assert!(
-                normal.dot(inside - a) > 0.0,
-                "triangle {triangle:?} faces outward"
-            );
+            assert!(normal.dot(inside - a) > 0.0, "triangle {triangle:?} faces outward");
         }
     }
 }

@@ -21,12 +21,7 @@ pub fn mip_chain(image: &RgbaImage) -> Vec<RgbaImage> {
         if width == 1 && height == 1 {
             break;
         }
-        let next = imageops::resize(
-            last,
-            (width / 2).max(1),
-            (height / 2).max(1),
-            FilterType::Triangle,
-        );
+        let next = imageops::resize(last, (width / 2).max(1), (height / 2).max(1), FilterType::Triangle);
         levels.push(next);
     }
     levels
@@ -43,22 +38,13 @@ pub fn upload(
     let (width, height) = layers.first().map_or((0, 0), |image| image.dimensions());
     let max = device.limits().max_texture_dimension_2d;
     if width == 0 || height == 0 || width > max || height > max {
-        return Err(RenderError::TextureSize {
-            what: what.to_string(),
-            width,
-            height,
-            max,
-        });
+        return Err(RenderError::TextureSize { what: what.to_string(), width, height, max });
     }
     let chains: Vec<Vec<RgbaImage>> = layers.iter().map(|image| mip_chain(image)).collect();
     let mip_level_count = chains[0].len() as u32;
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(what),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: layers.len() as u32,
-        },
+        size: wgpu::Extent3d { width, height, depth_or_array_layers: layers.len() as u32 },
         mip_level_count,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -72,11 +58,7 @@ pub fn upload(
                 wgpu::TexelCopyTextureInfo {
                     texture: &texture,
                     mip_level: level as u32,
-                    origin: wgpu::Origin3d {
-                        x: 0,
-                        y: 0,
-                        z: layer as u32,
-                    },
+                    origin: wgpu::Origin3d { x: 0, y: 0, z: layer as u32 },
                     aspect: wgpu::TextureAspect::All,
                 },
                 image.as_raw(),
@@ -85,11 +67,7 @@ pub fn upload(
                     bytes_per_row: Some(4 * image.width()),
                     rows_per_image: Some(image.height()),
                 },
-                wgpu::Extent3d {
-                    width: image.width(),
-                    height: image.height(),
-                    depth_or_array_layers: 1,
-                },
+                wgpu::Extent3d { width: image.width(), height: image.height(), depth_or_array_layers: 1 },
             );
         }
     }
@@ -98,11 +76,7 @@ pub fn upload(
 
 /// A trilinear sampler that clamps (`repeat = false`) or repeats texture coordinates.
 pub fn sampler(device: &wgpu::Device, repeat: bool) -> wgpu::Sampler {
-    let address = if repeat {
-        wgpu::AddressMode::Repeat
-    } else {
-        wgpu::AddressMode::ClampToEdge
-    };
+    let address = if repeat { wgpu::AddressMode::Repeat } else { wgpu::AddressMode::ClampToEdge };
     device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some(if repeat { "repeat" } else { "clamp" }),
         address_mode_u: address,
@@ -127,11 +101,7 @@ impl DepthBuffer {
     pub fn new(device: &wgpu::Device, size: (u32, u32)) -> Self {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("depth"),
-            size: wgpu::Extent3d {
-                width: size.0,
-                height: size.1,
-                depth_or_array_layers: 1,
-            },
+            size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -139,10 +109,7 @@ impl DepthBuffer {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             view_formats: &[],
         });
-        Self {
-            view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
-            size,
-        }
+        Self { view: texture.create_view(&wgpu::TextureViewDescriptor::default()), size }
     }
 
     /// The buffer's size in pixels.
@@ -163,24 +130,15 @@ mod tests {
     #[test]
     fn mip_chain_halves_down_to_one_texel() {
         let image = RgbaImage::from_pixel(12, 5, image::Rgba([10, 20, 30, 255]));
-        let sizes: Vec<_> = mip_chain(&image)
-            .iter()
-            .map(RgbaImage::dimensions)
-            .collect();
+        let sizes: Vec<_> = mip_chain(&image).iter().map(RgbaImage::dimensions).collect();
         assert_eq!(sizes, vec![(12, 5), (6, 2), (3, 1), (1, 1)]);
         // A flat image stays flat at every level.
-        assert!(
-            mip_chain(&image)
-                .iter()
-                .all(|level| level.pixels().all(|p| p.0 == [10, 20, 30, 255]))
-        );
+        assert!(mip_chain(&image).iter().all(|level| level.pixels().all(|p| p.0 == [10, 20, 30, 255])));
     }
 
     #[test]
     fn mip_chain_averages() {
-        let image = RgbaImage::from_fn(2, 2, |x, _| {
-            image::Rgba([if x == 0 { 0 } else { 200 }, 0, 0, 255])
-        });
+        let image = RgbaImage::from_fn(2, 2, |x, _| image::Rgba([if x == 0 { 0 } else { 200 }, 0, 0, 255]));
         let chain = mip_chain(&image);
         assert_eq!(chain.len(), 2);
         let red = chain[1].get_pixel(0, 0).0[0];

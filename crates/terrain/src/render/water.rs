@@ -44,10 +44,7 @@ impl WaterPass {
     ) -> Result<Self, RenderError> {
         let device = context.device;
         let texture = upload(device, context.queue, "water texture", &[texture])?;
-        let uniforms = WaterUniforms {
-            alpha: config.water_alpha,
-            padding: [0.0; 3],
-        };
+        let uniforms = WaterUniforms { alpha: config.water_alpha, padding: [0.0; 3] };
         let uniform_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("water uniforms"),
             contents: bytemuck::bytes_of(&uniforms),
@@ -104,22 +101,10 @@ fn plane(config: &SceneConfig) -> [WaterVertex; 4] {
     let (hx, hz) = (config.sky_box_size.x / 2.0, config.sky_box_size.z / 2.0);
     let (ru, rv) = (config.water_repeat.x, config.water_repeat.y);
     [
-        WaterVertex {
-            position: [-hx, 0.0, -hz],
-            uv: [0.0, 0.0],
-        },
-        WaterVertex {
-            position: [-hx, 0.0, hz],
-            uv: [0.0, rv],
-        },
-        WaterVertex {
-            position: [hx, 0.0, -hz],
-            uv: [ru, 0.0],
-        },
-        WaterVertex {
-            position: [hx, 0.0, hz],
-            uv: [ru, rv],
-        },
+        WaterVertex { position: [-hx, 0.0, -hz], uv: [0.0, 0.0] },
+        WaterVertex { position: [-hx, 0.0, hz], uv: [0.0, rv] },
+        WaterVertex { position: [hx, 0.0, -hz], uv: [ru, 0.0] },
+        WaterVertex { position: [hx, 0.0, hz], uv: [ru, rv] },
     ]
 }
 

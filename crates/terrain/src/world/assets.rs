@@ -23,14 +23,10 @@ pub const ASSET_FILES: [&str; 9] = [
 /// File names are matched without regard to case, and the sky files may also sit in a `SkyBox`
 /// subfolder (as in some course repositories). When files are missing the error lists all of them.
 pub fn load_course_folder(dir: &Path) -> Result<World, WorldError> {
-    let metadata = std::fs::metadata(dir).map_err(|source| WorldError::Read {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    let metadata =
+        std::fs::metadata(dir).map_err(|source| WorldError::Read { path: dir.to_path_buf(), source })?;
     if !metadata.is_dir() {
-        return Err(WorldError::NotAFolder {
-            path: dir.to_path_buf(),
-        });
+        return Err(WorldError::NotAFolder { path: dir.to_path_buf() });
     }
     let mut found = Vec::with_capacity(ASSET_FILES.len());
     let mut missing = Vec::new();
@@ -41,10 +37,7 @@ pub fn load_course_folder(dir: &Path) -> Result<World, WorldError> {
         }
     }
     if !missing.is_empty() {
-        return Err(WorldError::MissingAssets {
-            dir: dir.to_path_buf(),
-            missing,
-        });
+        return Err(WorldError::MissingAssets { dir: dir.to_path_buf(), missing });
     }
     // Every file was found: `found[i]` is the path of `ASSET_FILES[i]`.
     let path = |i: usize| found[i].as_path();
@@ -53,12 +46,7 @@ pub fn load_course_folder(dir: &Path) -> Result<World, WorldError> {
         colour_map: read_rgba(path(1))?,
         detail_map: read_rgba(path(2))?,
         sky: SkyBox {
-            sides: [
-                read_rgba(path(3))?,
-                read_rgba(path(4))?,
-                read_rgba(path(5))?,
-                read_rgba(path(6))?,
-            ],
+            sides: [read_rgba(path(3))?, read_rgba(path(4))?, read_rgba(path(5))?, read_rgba(path(6))?],
             top: read_rgba(path(7))?,
         },
         water: read_rgba(path(8))?,
@@ -84,18 +72,11 @@ fn find_ignoring_case(dir: &Path, name: &str) -> Result<Option<PathBuf>, WorldEr
     if exact.exists() {
         return Ok(Some(exact));
     }
-    let entries = std::fs::read_dir(dir).map_err(|source| WorldError::Read {
-        path: dir.to_path_buf(),
-        source,
-    })?;
-    Ok(entries
-        .filter_map(Result::ok)
-        .map(|entry| entry.path())
-        .find(|path| {
-            path.file_name()
-                .and_then(|file| file.to_str())
-                .is_some_and(|file| file.eq_ignore_ascii_case(name))
-        }))
+    let entries =
+        std::fs::read_dir(dir).map_err(|source| WorldError::Read { path: dir.to_path_buf(), source })?;
+    Ok(entries.filter_map(Result::ok).map(|entry| entry.path()).find(|path| {
+        path.file_name().and_then(|file| file.to_str()).is_some_and(|file| file.eq_ignore_ascii_case(name))
+    }))
 }
 
 #[cfg(test)]
@@ -103,8 +84,7 @@ mod tests {
     use super::*;
 
     fn scratch(name: &str) -> PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("rayterra-assets-{name}-{}", std::process::id()));
+        let dir = std::env::temp_dir().join(format!("rayterra-assets-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).expect("temp dir");
         dir
@@ -140,12 +120,7 @@ mod tests {
         write_bmp(&dir.join("detail.bmp"), 8, 8, 128);
         std::fs::create_dir(dir.join("SkyBox")).expect("subfolder");
         for i in 0..6 {
-            write_bmp(
-                &dir.join("SkyBox").join(format!("SkyBox{i}.bmp")),
-                4,
-                4,
-                10 * i as u8,
-            );
+            write_bmp(&dir.join("SkyBox").join(format!("SkyBox{i}.bmp")), 4, 4, 10 * i as u8);
         }
         let world = load_course_folder(&dir).expect("complete folder");
         assert_eq!((world.heightmap.columns(), world.heightmap.rows()), (6, 5));
@@ -173,10 +148,7 @@ mod tests {
         let dir = scratch("file");
         let file = dir.join("heightmap.bmp");
         write_bmp(&file, 4, 4, 1);
-        assert!(matches!(
-            load_course_folder(&file),
-            Err(WorldError::NotAFolder { .. })
-        ));
+        assert!(matches!(load_course_folder(&file), Err(WorldError::NotAFolder { .. })));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -13,10 +13,7 @@ use crate::output::{SaveError, save_image};
 /// The heightmap is written as 8-bit grey levels (rounded), like the course's. Each file is
 /// written whole or not at all. Returns the paths written.
 pub fn save_course_folder(world: &World, dir: &Path) -> Result<Vec<PathBuf>, SaveError> {
-    std::fs::create_dir_all(dir).map_err(|source| SaveError::Io {
-        path: dir.to_path_buf(),
-        source,
-    })?;
+    std::fs::create_dir_all(dir).map_err(|source| SaveError::Io { path: dir.to_path_buf(), source })?;
     let grey = DynamicImage::ImageLuma16(world.heightmap.to_image()).into_luma8();
     let images = [
         DynamicImage::ImageLuma8(grey),
@@ -52,10 +49,7 @@ mod tests {
 
     #[test]
     fn round_trips_through_the_course_layout() {
-        let options = ProceduralOptions {
-            seed: 2,
-            heightmap_size: 24,
-        };
+        let options = ProceduralOptions { seed: 2, heightmap_size: 24 };
         let world = generate(options, &SceneConfig::default(), &mut |_| {}).expect("valid");
         let dir = std::env::temp_dir().join(format!("rayterra-export-{}", std::process::id()));
         let written = save_course_folder(&world, &dir).expect("writable");

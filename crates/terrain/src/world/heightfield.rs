@@ -28,11 +28,7 @@ impl Heightfield {
             columns,
             rows,
             cell_size: config.terrain_length / columns.max(rows) as f32,
-            heights: heightmap
-                .levels()
-                .iter()
-                .map(|&level| config.height_of_level(level))
-                .collect(),
+            heights: heightmap.levels().iter().map(|&level| config.height_of_level(level)).collect(),
         }
     }
 
@@ -63,10 +59,7 @@ impl Heightfield {
 
     /// World height of sample (`row`, `column`). Panics when out of range.
     pub fn height(&self, row: u32, column: u32) -> f32 {
-        assert!(
-            row < self.rows && column < self.columns,
-            "sample out of range"
-        );
+        assert!(row < self.rows && column < self.columns, "sample out of range");
         self.heights[(row * self.columns + column) as usize]
     }
 
@@ -90,10 +83,8 @@ impl Heightfield {
         if !(0.0..=last_column).contains(&column) || !(0.0..=last_row).contains(&row) {
             return None;
         }
-        let (c0, r0) = (
-            (column.floor() as u32).min(self.columns - 2),
-            (row.floor() as u32).min(self.rows - 2),
-        );
+        let (c0, r0) =
+            ((column.floor() as u32).min(self.columns - 2), (row.floor() as u32).min(self.rows - 2));
         let (fx, fz) = (column - c0 as f32, row - r0 as f32);
         let top = lerp(self.height(r0, c0), self.height(r0, c0 + 1), fx);
         let bottom = lerp(self.height(r0 + 1, c0), self.height(r0 + 1, c0 + 1), fx);

@@ -66,24 +66,13 @@ impl Heightmap {
     pub fn new(columns: u32, rows: u32, levels: Vec<f32>) -> Result<Self, HeightmapError> {
         Self::check_size(columns, rows)?;
         if levels.len() != columns as usize * rows as usize {
-            return Err(HeightmapError::SampleCount {
-                columns,
-                rows,
-                len: levels.len(),
-            });
+            return Err(HeightmapError::SampleCount { columns, rows, len: levels.len() });
         }
         if let Some(index) = levels.iter().position(|level| !level.is_finite()) {
             let index = index as u32;
-            return Err(HeightmapError::NotFinite {
-                row: index / columns,
-                column: index % columns,
-            });
+            return Err(HeightmapError::NotFinite { row: index / columns, column: index % columns });
         }
-        Ok(Self {
-            columns,
-            rows,
-            levels,
-        })
+        Ok(Self { columns, rows, levels })
     }
 
     /// The heightmap of a decoded image. Colour images are reduced to their luminance; 8-bit
@@ -101,10 +90,8 @@ impl Heightmap {
     /// the content). Errors name the file.
     pub fn load(path: &Path) -> Result<Self, WorldError> {
         let image = read_image(path)?;
-        Self::from_image(&image).map_err(|problem| WorldError::BadHeightmap {
-            path: path.to_path_buf(),
-            problem,
-        })
+        Self::from_image(&image)
+            .map_err(|problem| WorldError::BadHeightmap { path: path.to_path_buf(), problem })
     }
 
     /// Whether a heightmap may have `columns` x `rows` samples (2 to [`MAX_HEIGHTMAP_SIDE`] per side).
@@ -130,10 +117,7 @@ impl Heightmap {
 
     /// Grey level at `row`, `column` (0.0..=255.0 for images). Panics when out of range.
     pub fn level(&self, row: u32, column: u32) -> f32 {
-        assert!(
-            row < self.rows && column < self.columns,
-            "sample out of range"
-        );
+        assert!(row < self.rows && column < self.columns, "sample out of range");
         self.levels[(row * self.columns + column) as usize]
     }
 
@@ -144,11 +128,8 @@ impl Heightmap {
 
     /// The heightmap as a 16-bit greyscale image (`level * 257`, clamped to 0..=65535).
     pub fn to_image(&self) -> image::ImageBuffer<image::Luma<u16>, Vec<u16>> {
-        let data = self
-            .levels
-            .iter()
-            .map(|level| (level * 257.0).round().clamp(0.0, 65535.0) as u16)
-            .collect();
+        let data =
+            self.levels.iter().map(|level| (level * 257.0).round().clamp(0.0, 65535.0) as u16).collect();
         image::ImageBuffer::from_raw(self.columns, self.rows, data)
             .expect("a heightmap holds exactly columns * rows levels")
     }
@@ -171,9 +152,8 @@ mod tests {
 
     #[test]
     fn sixteen_bit_levels_keep_precision() {
-        let image: ImageBuffer<Luma<u16>, Vec<u16>> = ImageBuffer::from_fn(2, 2, |x, y| {
-            Luma([[0, 65535, 257 * 100 + 128, 1][(y * 2 + x) as usize]])
-        });
+        let image: ImageBuffer<Luma<u16>, Vec<u16>> =
+            ImageBuffer::from_fn(2, 2, |x, y| Luma([[0, 65535, 257 * 100 + 128, 1][(y * 2 + x) as usize]]));
         let map = Heightmap::from_image(&DynamicImage::ImageLuma16(image)).expect("valid");
         assert_eq!(map.level(0, 0), 0.0);
         assert_eq!(map.level(0, 1), 255.0);
@@ -190,13 +170,7 @@ mod tests {
 
     #[test]
     fn rejects_bad_grids() {
-        assert_eq!(
-            Heightmap::new(1, 5, vec![0.0; 5]),
-            Err(HeightmapError::TooSmall {
-                columns: 1,
-                rows: 5
-            })
-        );
+        assert_eq!(Heightmap::new(1, 5, vec![0.0; 5]), Err(HeightmapError::TooSmall { columns: 1, rows: 5 }));
         assert!(matches!(
             Heightmap::new(MAX_HEIGHTMAP_SIDE + 1, 2, Vec::new()),
             Err(HeightmapError::TooLarge { .. })
@@ -214,8 +188,7 @@ mod tests {
     #[test]
     fn round_trips_through_a_sixteen_bit_image() {
         let map = Heightmap::new(3, 2, vec![0.0, 12.5, 255.0, 100.0, 99.75, 3.0]).expect("valid");
-        let back =
-            Heightmap::from_image(&DynamicImage::ImageLuma16(map.to_image())).expect("valid");
+        let back = Heightmap::from_image(&DynamicImage::ImageLuma16(map.to_image())).expect("valid");
         for (a, b) in map.levels().iter().zip(back.levels()) {
             assert!((a - b).abs() < 1.0 / 257.0, "{a} vs {b}");
         }

@@ -124,8 +124,7 @@ impl TerrainMesh {
                     let (ni, nj) = (i as isize + di, j as isize + dj);
                     let inside = (0..row_spans.len() as isize).contains(&ni)
                         && (0..column_spans.len() as isize).contains(&nj);
-                    let errors =
-                        inside.then(|| &errors[ni as usize * column_spans.len() + nj as usize]);
+                    let errors = inside.then(|| &errors[ni as usize * column_spans.len() + nj as usize]);
                     errors.and_then(|e| e.last().copied()).unwrap_or(0.0)
                 };
                 let skirt_depth = [(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)]
@@ -198,13 +197,10 @@ impl TerrainMesh {
             self.positions.extend(block.positions);
             self.indices.extend(block.indices.iter().map(|&i| i as u16));
         }
-        let heights = (rows.0..=rows.1)
-            .flat_map(|r| (columns.0..=columns.1).map(move |c| field.height(r, c)));
+        let heights =
+            (rows.0..=rows.1).flat_map(|r| (columns.0..=columns.1).map(move |c| field.height(r, c)));
         let (low, high) = heights.fold((f32::MAX, f32::MIN), |(lo, hi), h| (lo.min(h), hi.max(h)));
-        let (first, last) = (
-            field.point(rows.0, columns.0),
-            field.point(rows.1, columns.1),
-        );
+        let (first, last) = (field.point(rows.0, columns.0), field.point(rows.1, columns.1));
         Chunk {
             min: Vec3::new(first.x, (low - skirt_depth).max(0.0), first.z),
             max: Vec3::new(last.x, high.max(0.0), last.z),
@@ -227,12 +223,8 @@ impl TerrainMesh {
     pub fn triangles(&self, level: &ChunkLevel, range: std::ops::Range<u32>) -> Vec<[Vec3; 3]> {
         let start = (level.first_index + range.start) as usize;
         let end = (level.first_index + range.end) as usize;
-        let vertex =
-            |i: u16| Vec3::from_array(self.positions[level.base_vertex as usize + usize::from(i)]);
-        self.indices[start..end]
-            .chunks_exact(3)
-            .map(|t| [vertex(t[0]), vertex(t[1]), vertex(t[2])])
-            .collect()
+        let vertex = |i: u16| Vec3::from_array(self.positions[level.base_vertex as usize + usize::from(i)]);
+        self.indices[start..end].chunks_exact(3).map(|t| [vertex(t[0]), vertex(t[1]), vertex(t[2])]).collect()
     }
 
     /// Number of surface triangles of `level` over all chunks (chunks with fewer levels count
@@ -267,12 +259,8 @@ impl TerrainMesh {
                 }
                 let distance = (view.eye.clamp(min, max) - view.eye).length().max(1e-3);
                 let allowed = view.max_error_pixels * distance / view.pixels_per_unit;
-                let level = chunk
-                    .levels
-                    .iter()
-                    .rev()
-                    .find(|l| l.error <= allowed)
-                    .unwrap_or(&chunk.levels[0]);
+                let level =
+                    chunk.levels.iter().rev().find(|l| l.error <= allowed).unwrap_or(&chunk.levels[0]);
                 let range = DrawRange {
                     first_index: level.first_index,
                     index_count: level.index_count,
@@ -362,12 +350,7 @@ impl Block {
             self.positions.len() as u32 - 1
         };
         let (p_low, q_low) = (below(p), below(q));
-        for triangle in [
-            [p, q, q_low],
-            [p, q_low, p_low],
-            [q, p, p_low],
-            [q, p_low, q_low],
-        ] {
+        for triangle in [[p, q, q_low], [p, q_low, p_low], [q, p, p_low], [q, p_low, q_low]] {
             self.add(triangle);
         }
     }
@@ -395,8 +378,7 @@ impl Block {
             }
         }
         for k in 1..polygon.len() - 1 {
-            self.indices
-                .extend([polygon[0], polygon[k], polygon[k + 1]]);
+            self.indices.extend([polygon[0], polygon[k], polygon[k + 1]]);
         }
     }
 
@@ -407,17 +389,10 @@ impl Block {
             return vertex;
         }
         // Interpolate from the lower-indexed end so both triangles of the edge agree exactly.
-        let (from, to) = (
-            self.positions[key.0 as usize],
-            self.positions[key.1 as usize],
-        );
+        let (from, to) = (self.positions[key.0 as usize], self.positions[key.1 as usize]);
         let t = from[1] / (from[1] - to[1]);
         let vertex = self.positions.len() as u32;
-        self.positions.push([
-            from[0] + (to[0] - from[0]) * t,
-            0.0,
-            from[2] + (to[2] - from[2]) * t,
-        ]);
+        self.positions.push([from[0] + (to[0] - from[0]) * t, 0.0, from[2] + (to[2] - from[2]) * t]);
         self.crossings.insert(key, vertex);
         vertex
     }
@@ -452,15 +427,10 @@ mod tests {
     fn full_resolution_land_is_two_upward_triangles_per_cell() {
         for (columns, rows) in [(2, 2), (3, 7), (16, 5), (70, 40)] {
             // Levels 100..=255: all at or above the water.
-            let levels = (0..columns * rows)
-                .map(|i| 100.0 + (i * 37 % 156) as f32)
-                .collect();
+            let levels = (0..columns * rows).map(|i| 100.0 + (i * 37 % 156) as f32).collect();
             let f = field(columns, rows, levels);
             let mesh = TerrainMesh::new(&f);
-            assert_eq!(
-                mesh.triangle_count(0),
-                2 * ((columns - 1) * (rows - 1)) as usize
-            );
+            assert_eq!(mesh.triangle_count(0), 2 * ((columns - 1) * (rows - 1)) as usize);
             let surface = mesh.surface_triangles(0);
             for [a, b, c] in &surface {
                 assert!((*b - *a).cross(*c - *a).y > 0.0, "triangle faces down");
@@ -472,18 +442,13 @@ mod tests {
 
     #[test]
     fn every_level_covers_the_whole_land() {
-        let levels = (0..70 * 40)
-            .map(|i| 100.0 + (i * 37 % 156) as f32)
-            .collect();
+        let levels = (0..70 * 40).map(|i| 100.0 + (i * 37 % 156) as f32).collect();
         let f = field(70, 40, levels);
         let mesh = TerrainMesh::new(&f);
         let extent = f.extent() - f.cell_size();
         for level in 0..6 {
             let surface = mesh.surface_triangles(level);
-            assert!(
-                (plan_area(&surface) - extent.x * extent.y).abs() < 1e-3,
-                "level {level}"
-            );
+            assert!((plan_area(&surface) - extent.x * extent.y).abs() < 1e-3, "level {level}");
             if level > 0 {
                 assert!(mesh.triangle_count(level) < mesh.triangle_count(level - 1));
             }
@@ -497,14 +462,10 @@ mod tests {
         // 69 x 39 cells: 3 x 2 chunks of up to 32 cells.
         assert_eq!(mesh.chunks.len(), 6);
         assert_eq!(mesh.chunks[0].levels.len(), 6, "strides 1 to 32");
-        assert_eq!(
-            mesh.chunks[5].levels.len(),
-            4,
-            "a 5 x 7-cell chunk: strides 1 to 8"
-        );
+        assert_eq!(mesh.chunks[5].levels.len(), 4, "a 5 x 7-cell chunk: strides 1 to 8");
         for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
-            let indices = &mesh.indices
-                [level.first_index as usize..(level.first_index + level.index_count) as usize];
+            let indices =
+                &mesh.indices[level.first_index as usize..(level.first_index + level.index_count) as usize];
             assert!(indices.iter().all(|&i| u32::from(i) < level.vertex_count));
         }
         // Blocks follow one another without gaps or overlaps.
@@ -519,13 +480,7 @@ mod tests {
     #[test]
     fn planes_have_no_error_and_bumps_do() {
         // A tilted plane is exact at every level.
-        let ramp = field(
-            33,
-            33,
-            (0..33 * 33)
-                .map(|i| 110.0 + (i % 33) as f32 * 3.0)
-                .collect(),
-        );
+        let ramp = field(33, 33, (0..33 * 33).map(|i| 110.0 + (i % 33) as f32 * 3.0).collect());
         let mesh = TerrainMesh::new(&ramp);
         assert!(mesh.chunks[0].levels.iter().all(|l| l.error < 1e-4));
         // A single raised sample: exact at level 0, off by its height when skipped.
@@ -561,19 +516,10 @@ mod tests {
         // i.e. 2.5 cells wide, over 2 cells of depth.
         let cell = f.cell_size();
         let expected = 2.5 * cell * 2.0 * cell;
-        assert!(
-            (plan_area(&surface) - expected).abs() < 1e-4,
-            "{}",
-            plan_area(&surface)
-        );
+        assert!((plan_area(&surface) - expected).abs() < 1e-4, "{}", plan_area(&surface));
         // The crossing points sit exactly on the waterline between columns 1 and 2.
         let x = (f.point(0, 1).x + f.point(0, 2).x) / 2.0;
-        let waterline: Vec<Vec3> = surface
-            .iter()
-            .flatten()
-            .copied()
-            .filter(|v| v.y == 0.0)
-            .collect();
+        let waterline: Vec<Vec3> = surface.iter().flatten().copied().filter(|v| v.y == 0.0).collect();
         assert!(!waterline.is_empty());
         for v in waterline {
             let on_row = (0..3).any(|r| (v.z - f.point(r, 0).z).abs() < 1e-5);
@@ -591,12 +537,7 @@ mod tests {
         assert!(level.index_count > level.surface_indices);
         let skirts = mesh.triangles(&level, level.surface_indices..level.index_count);
         let top = f.height(0, 0);
-        assert!(
-            skirts
-                .iter()
-                .flatten()
-                .all(|v| v.y <= top + 1e-6 && v.y >= 0.0)
-        );
+        assert!(skirts.iter().flatten().all(|v| v.y <= top + 1e-6 && v.y >= 0.0));
         assert!(skirts.iter().flatten().any(|v| v.y < top));
         // Vertical: no area seen from above.
         assert!(plan_area(&skirts) < 1e-6);
@@ -630,11 +571,7 @@ mod tests {
     }
 
     fn view(mesh_mirrored: bool, pose: CameraPose) -> LodView {
-        let lens = Lens {
-            field_of_view_degrees: 45.0,
-            near: 0.1,
-            far: 500.0,
-        };
+        let lens = Lens { field_of_view_degrees: 45.0, near: 0.1, far: 500.0 };
         let view_projection = lens.projection(16.0 / 9.0) * pose.view_matrix();
         LodView {
             eye: pose.position,
@@ -659,9 +596,7 @@ mod tests {
             mesh.chunks
                 .iter()
                 .flat_map(|c| c.levels.iter().enumerate())
-                .find(|(_, l)| {
-                    l.first_index == range.first_index && l.base_vertex == range.base_vertex
-                })
+                .find(|(_, l)| l.first_index == range.first_index && l.base_vertex == range.base_vertex)
                 .map(|(i, _)| i)
                 .expect("a chunk level")
         };
@@ -671,10 +606,7 @@ mod tests {
         let chosen = mesh.select(&view(false, pose));
         assert!(chosen.len() < mesh.chunks.len(), "nothing was culled");
         let levels: Vec<usize> = chosen.iter().map(level_of).collect();
-        assert!(
-            levels.contains(&0) && levels.iter().any(|&l| l > 0),
-            "{levels:?}"
-        );
+        assert!(levels.contains(&0) && levels.iter().any(|&l| l > 0), "{levels:?}");
         // Every choice keeps its error within a pixel.
         let v = view(false, pose);
         for range in &chosen {
@@ -685,9 +617,7 @@ mod tests {
                 .expect("chunk");
             let level = &chunk.levels[level_of(range)];
             let distance = (v.eye.clamp(chunk.min, chunk.max) - v.eye).length();
-            assert!(
-                level.error * v.pixels_per_unit / distance <= 1.0 + 1e-4 || level_of(range) == 0
-            );
+            assert!(level.error * v.pixels_per_unit / distance <= 1.0 + 1e-4 || level_of(range) == 0);
         }
         // Nearest first.
         let centre_distance = |range: &DrawRange| {
@@ -698,18 +628,10 @@ mod tests {
                 .expect("chunk");
             ((chunk.min + chunk.max) * 0.5 - v.eye).length()
         };
-        assert!(
-            chosen
-                .windows(2)
-                .all(|w| centre_distance(&w[0]) <= centre_distance(&w[1]))
-        );
+        assert!(chosen.windows(2).all(|w| centre_distance(&w[0]) <= centre_distance(&w[1])));
         // Far above, everything fits in few triangles.
         let high = CameraPose::new(Vec3::new(0.0, 150.0, 0.0), 0.0, -89.0);
-        let coarse: u32 = mesh
-            .select(&view(false, high))
-            .iter()
-            .map(|r| r.index_count)
-            .sum();
+        let coarse: u32 = mesh.select(&view(false, high)).iter().map(|r| r.index_count).sum();
         let fine: u32 = chosen.iter().map(|r| r.index_count).sum();
         assert!(coarse < fine, "{coarse} vs {fine}");
     }

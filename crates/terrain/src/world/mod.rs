@@ -100,13 +100,8 @@ pub enum SkyFace {
 impl SkyFace {
     /// All faces: the four walls in order around the box, then the top. A face's position in
     /// this list is its index (layer) in [`SkyBox::faces`].
-    pub const ALL: [SkyFace; 5] = [
-        SkyFace::Front,
-        SkyFace::Right,
-        SkyFace::Back,
-        SkyFace::Left,
-        SkyFace::Top,
-    ];
+    pub const ALL: [SkyFace; 5] =
+        [SkyFace::Front, SkyFace::Right, SkyFace::Back, SkyFace::Left, SkyFace::Top];
 
     /// The point of this face shown at texture coordinates (`u`, `v`) (0..1, v down the image),
     /// for a box of `size` (x width, y height, z depth) standing on y = 0, centred on the y axis.
@@ -126,13 +121,7 @@ impl SkyFace {
 impl SkyBox {
     /// The five images in [`SkyFace::ALL`] order.
     pub fn faces(&self) -> [&RgbaImage; 5] {
-        [
-            &self.sides[0],
-            &self.sides[1],
-            &self.sides[2],
-            &self.sides[3],
-            &self.top,
-        ]
+        [&self.sides[0], &self.sides[1], &self.sides[2], &self.sides[3], &self.top]
     }
 }
 
@@ -153,20 +142,12 @@ pub struct World {
 
 /// Decodes an image file, recognising its format from its content. Errors name the file.
 pub fn read_image(path: &Path) -> Result<DynamicImage, WorldError> {
-    let reader = image::ImageReader::open(path).map_err(|source| WorldError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let reader = image::ImageReader::open(path)
+        .map_err(|source| WorldError::Read { path: path.to_path_buf(), source })?;
     let reader = reader
         .with_guessed_format()
-        .map_err(|source| WorldError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
-    reader.decode().map_err(|source| WorldError::Decode {
-        path: path.to_path_buf(),
-        source,
-    })
+        .map_err(|source| WorldError::Read { path: path.to_path_buf(), source })?;
+    reader.decode().map_err(|source| WorldError::Decode { path: path.to_path_buf(), source })
 }
 
 /// Decodes an image file into 8-bit RGBA. Errors name the file.
@@ -189,18 +170,9 @@ mod tests {
             }
         }
         // The top's bottom row runs along the front wall's top, its left column along the left wall's.
-        assert_eq!(
-            SkyFace::Top.point(0.25, 1.0, size),
-            SkyFace::Front.point(0.25, 0.0, size)
-        );
-        assert_eq!(
-            SkyFace::Top.point(0.0, 0.25, size),
-            SkyFace::Left.point(0.25, 0.0, size)
-        );
-        assert_eq!(
-            SkyFace::Front.point(0.5, 1.0, size),
-            DVec3::new(0.0, 0.0, -140.0)
-        );
+        assert_eq!(SkyFace::Top.point(0.25, 1.0, size), SkyFace::Front.point(0.25, 0.0, size));
+        assert_eq!(SkyFace::Top.point(0.0, 0.25, size), SkyFace::Left.point(0.25, 0.0, size));
+        assert_eq!(SkyFace::Front.point(0.5, 1.0, size), DVec3::new(0.0, 0.0, -140.0));
     }
 
     #[test]
@@ -208,11 +180,6 @@ mod tests {
         let path = Path::new("/nonexistent/rayterra/heightmap.png");
         let error = read_image(path).expect_err("no such file");
         assert!(matches!(error, WorldError::Read { .. }));
-        assert!(
-            error
-                .to_string()
-                .contains("/nonexistent/rayterra/heightmap.png"),
-            "{error}"
-        );
+        assert!(error.to_string().contains("/nonexistent/rayterra/heightmap.png"), "{error}");
     }
 }

@@ -66,11 +66,7 @@ pub fn course_assets() -> Option<PathBuf> {
 
 /// The course's starting view at `time_seconds`.
 pub fn start_view(time_seconds: f64) -> FrameView {
-    FrameView {
-        pose: SceneConfig::default().camera_start,
-        field_of_view_degrees: 45.0,
-        time_seconds,
-    }
+    FrameView { pose: SceneConfig::default().camera_start, field_of_view_degrees: 45.0, time_seconds }
 }
 
 /// A view from `position` with yaw and pitch in degrees, at time 0, 45 degrees field of view.
@@ -96,24 +92,14 @@ fn flat(colour: [u8; 3], size: u32) -> RgbaImage {
 /// its left half under water (level 50, y = -0.75) and its right half above (level 180, y = 1.2).
 pub fn marker_world(detail_grey: u8) -> World {
     let columns = 64;
-    let levels = (0..columns * columns)
-        .map(|i| {
-            if i % columns < columns / 2 {
-                50.0
-            } else {
-                180.0
-            }
-        })
-        .collect();
+    let levels =
+        (0..columns * columns).map(|i| if i % columns < columns / 2 { 50.0 } else { 180.0 }).collect();
     let green = flat([0, 255, 0], 8);
     World {
         heightmap: Heightmap::new(columns, columns, levels).expect("valid"),
         colour_map: flat([255, 0, 0], 16),
         detail_map: flat([detail_grey; 3], 16),
-        sky: SkyBox {
-            sides: [green.clone(), green.clone(), green.clone(), green.clone()],
-            top: green,
-        },
+        sky: SkyBox { sides: [green.clone(), green.clone(), green.clone(), green.clone()], top: green },
         water: flat([0, 0, 255], 8),
     }
 }
@@ -127,8 +113,7 @@ pub fn project(image: &RgbaImage, view: &FrameView, point: [f32; 3]) -> Option<(
         far: config.far,
     };
     let aspect = image.width() as f32 / image.height() as f32;
-    let clip =
-        lens.projection(aspect) * view.pose.view_matrix() * glam::Vec3::from(point).extend(1.0);
+    let clip = lens.projection(aspect) * view.pose.view_matrix() * glam::Vec3::from(point).extend(1.0);
     if clip.w <= 0.0 {
         return None;
     }
@@ -170,14 +155,7 @@ pub fn difference(a: &RgbaImage, b: &RgbaImage) -> (Difference, RgbaImage) {
         Rgba([r, g, b, 255])
     });
     let pixels = (a.width() * a.height()) as f64;
-    (
-        Difference {
-            mean: total as f64 / (pixels * 3.0),
-            worst,
-            outliers: outliers as f64 / pixels,
-        },
-        diff,
-    )
+    (Difference { mean: total as f64 / (pixels * 3.0), worst, outliers: outliers as f64 / pixels }, diff)
 }
 
 /// Checks `actual` against the golden image `tests/golden/{name}.png`.
@@ -188,9 +166,7 @@ pub fn difference(a: &RgbaImage, b: &RgbaImage) -> (Difference, RgbaImage) {
 /// written under `target/tmp/golden/`. A missing golden is a failure; `RAYTERRA_BLESS=1` writes
 /// the actual image as the new golden instead (look at it before committing it).
 pub fn assert_golden(name: &str, actual: &RgbaImage) {
-    let golden = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/golden")
-        .join(format!("{name}.png"));
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/golden").join(format!("{name}.png"));
     if std::env::var("RAYTERRA_BLESS").is_ok_and(|v| v == "1") {
         actual.save(&golden).expect("write golden");
         eprintln!("blessed {}: look at it before committing", golden.display());
@@ -211,11 +187,8 @@ pub fn assert_golden(name: &str, actual: &RgbaImage) {
     let passes = d.mean <= 1.0 && (d.worst <= 32 || d.outliers < 0.002);
     if !passes {
         actual.save(&actual_path).expect("write actual");
-        expected
-            .save(out.join(format!("{name}.expected.png")))
-            .expect("write expected");
-        diff.save(out.join(format!("{name}.diff.png")))
-            .expect("write diff");
+        expected.save(out.join(format!("{name}.expected.png"))).expect("write expected");
+        diff.save(out.join(format!("{name}.diff.png"))).expect("write diff");
         panic!(
             "{name} differs from its golden: mean {:.3}, worst {}, {:.3}% of pixels off by more than 24; see {}",
             d.mean,
@@ -224,10 +197,5 @@ pub fn assert_golden(name: &str, actual: &RgbaImage) {
             out.display()
         );
     }
-    eprintln!(
-        "{name}: mean {:.3}, worst {}, outliers {:.3}%",
-        d.mean,
-        d.worst,
-        d.outliers * 100.0
-    );
+    eprintln!("{name}: mean {:.3}, worst {}, outliers {:.3}%", d.mean, d.worst, d.outliers * 100.0);
 }

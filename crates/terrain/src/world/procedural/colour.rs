@@ -32,11 +32,7 @@ pub const MAX_COLOUR_MAP_SIDE: u32 = 2048;
 pub fn colour_map_size(columns: u32, rows: u32) -> (u32, u32) {
     let longest = columns.max(rows) * TEXELS_PER_SAMPLE;
     let scale = (MAX_COLOUR_MAP_SIDE as f64 / longest as f64).min(1.0);
-    let side = |samples: u32| {
-        ((samples * TEXELS_PER_SAMPLE) as f64 * scale)
-            .round()
-            .max(1.0) as u32
-    };
+    let side = |samples: u32| ((samples * TEXELS_PER_SAMPLE) as f64 * scale).round().max(1.0) as u32;
     (side(columns), side(rows))
 }
 
@@ -56,10 +52,8 @@ pub fn colour_map(heightmap: &Heightmap, config: &SceneConfig, seed: u32) -> Rgb
         let column = (x as f64 + 0.5) / width as f64 * columns as f64 - 0.5;
         let row = (y as f64 + 0.5) / height as f64 * rows as f64 - 0.5;
         let h = sample(&field, column, row);
-        let slope_x =
-            (sample(&field, column + 1.0, row) - sample(&field, column - 1.0, row)) / (2.0 * cell);
-        let slope_z =
-            (sample(&field, column, row + 1.0) - sample(&field, column, row - 1.0)) / (2.0 * cell);
+        let slope_x = (sample(&field, column + 1.0, row) - sample(&field, column - 1.0, row)) / (2.0 * cell);
+        let slope_z = (sample(&field, column, row + 1.0) - sample(&field, column, row - 1.0)) / (2.0 * cell);
         let normal = DVec3::new(-slope_x, 1.0, -slope_z).normalize();
         let steepness = 1.0 - normal.y; // 0 flat, ~0.3 at 45 degrees
         // Noise in map coordinates (u, v in 0..1), independent of the map's resolution.
@@ -69,27 +63,12 @@ pub fn colour_map(heightmap: &Heightmap, config: &SceneConfig, seed: u32) -> Rgb
         let band = bands.get([h * 2.5, u * 4.0, v * 4.0]);
 
         // Lowland: grass of varying shade, with darker woods in patches.
-        let grass = mix(
-            GRASS_LIGHT,
-            GRASS_DARK,
-            smoothstep(-0.5, 0.6, patch + 0.3 * fine),
-        );
-        let mut colour = mix(
-            grass,
-            FOREST,
-            smoothstep(0.15, 0.45, patch) * (1.0 - smoothstep(1.0, 1.5, h)),
-        );
+        let grass = mix(GRASS_LIGHT, GRASS_DARK, smoothstep(-0.5, 0.6, patch + 0.3 * fine));
+        let mut colour = mix(grass, FOREST, smoothstep(0.15, 0.45, patch) * (1.0 - smoothstep(1.0, 1.5, h)));
         // Rock on steep ground and above the tree line, banded like strata.
-        let rock = mix(
-            ROCK_LIGHT,
-            ROCK_DARK,
-            smoothstep(-0.6, 0.6, band + 0.5 * fine),
-        );
-        let rockiness = smoothstep(0.06, 0.16, steepness + 0.03 * fine).max(smoothstep(
-            1.25,
-            1.6,
-            h + 0.15 * patch,
-        ));
+        let rock = mix(ROCK_LIGHT, ROCK_DARK, smoothstep(-0.6, 0.6, band + 0.5 * fine));
+        let rockiness =
+            smoothstep(0.06, 0.16, steepness + 0.03 * fine).max(smoothstep(1.25, 1.6, h + 0.15 * patch));
         colour = mix(colour, rock, rockiness);
         // Snow on the peaks, sliding off the steepest faces.
         let snow = smoothstep(1.75, 1.95, h + 0.12 * patch + 0.05 * fine)
@@ -111,10 +90,8 @@ pub fn colour_map(heightmap: &Heightmap, config: &SceneConfig, seed: u32) -> Rgb
 fn sample(field: &Heightfield, column: f64, row: f64) -> f64 {
     let column = column.clamp(0.0, f64::from(field.columns() - 1));
     let row = row.clamp(0.0, f64::from(field.rows() - 1));
-    let (c0, r0) = (
-        (column.floor() as u32).min(field.columns() - 2),
-        (row.floor() as u32).min(field.rows() - 2),
-    );
+    let (c0, r0) =
+        ((column.floor() as u32).min(field.columns() - 2), (row.floor() as u32).min(field.rows() - 2));
     let (fx, fz) = (column - f64::from(c0), row - f64::from(r0));
     let at = |r: u32, c: u32| f64::from(field.height(r, c));
     let top = at(r0, c0) + (at(r0, c0 + 1) - at(r0, c0)) * fx;
@@ -152,22 +129,13 @@ mod tests {
     #[test]
     fn colours_follow_height() {
         let config = SceneConfig::default();
-        let at = |height: f32| {
-            mean(&colour_map(
-                &flat(config.level_of_height(height)),
-                &config,
-                1,
-            ))
-        };
+        let at = |height: f32| mean(&colour_map(&flat(config.level_of_height(height)), &config, 1));
         let beach = at(0.04);
         let lowland = at(0.6);
         let peak = at(2.2);
         // Sand is yellowish (red above blue), grass is green, snow is bright and neutral.
         assert!(beach[0] > beach[2] + 0.15, "beach {beach:?}");
-        assert!(
-            lowland[1] > lowland[0] && lowland[1] > lowland[2],
-            "lowland {lowland:?}"
-        );
+        assert!(lowland[1] > lowland[0] && lowland[1] > lowland[2], "lowland {lowland:?}");
         assert!(peak.iter().all(|&c| c > 0.6), "peak {peak:?}");
     }
 
@@ -179,8 +147,8 @@ mod tests {
         let levels = (0..8 * 64).map(|i| 110.0 + 20.0 * (i % 8) as f32).collect();
         let ramp = Heightmap::new(8, 64, levels).expect("valid");
         let rock = mean(&colour_map(&ramp, &config, 1));
-        let spread = rock.iter().copied().fold(f64::MIN, f64::max)
-            - rock.iter().copied().fold(f64::MAX, f64::min);
+        let spread =
+            rock.iter().copied().fold(f64::MIN, f64::max) - rock.iter().copied().fold(f64::MAX, f64::min);
         assert!(spread < 0.12, "rock should be greyish: {rock:?}");
     }
 

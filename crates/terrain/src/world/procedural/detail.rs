@@ -12,31 +12,18 @@ const DETAIL_SPREAD: f64 = 16.0;
 /// billowy pattern, normalised to mean 128 and a spread of 16 grey levels, so ADD_SIGNED leaves
 /// the terrain's mean colour unchanged. Bit-identical for the same arguments.
 pub fn detail_map(seed: u32, size: u32) -> RgbaImage {
-    let grain = Tileable::new(
-        Fbm::<Perlin>::new(layer_seed(seed, 30)).set_octaves(5),
-        16.0,
-    );
-    let pebbles = Tileable::new(
-        Billow::<Perlin>::new(layer_seed(seed, 31)).set_octaves(3),
-        24.0,
-    );
+    let grain = Tileable::new(Fbm::<Perlin>::new(layer_seed(seed, 30)).set_octaves(5), 16.0);
+    let pebbles = Tileable::new(Billow::<Perlin>::new(layer_seed(seed, 31)).set_octaves(3), 24.0);
     let values = grid_from_fn(size, size, |x, y| {
-        let (u, v) = (
-            (x as f64 + 0.5) / size as f64,
-            (y as f64 + 0.5) / size as f64,
-        );
+        let (u, v) = ((x as f64 + 0.5) / size as f64, (y as f64 + 0.5) / size as f64);
         grain.get(u, v) + 0.35 * pebbles.get(u, v)
     });
     let n = values.len() as f64;
     let mean = values.iter().sum::<f64>() / n;
-    let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n)
-        .sqrt()
-        .max(1e-9);
+    let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt().max(1e-9);
     let mut image = RgbaImage::new(size, size);
     for (pixel, value) in image.pixels_mut().zip(&values) {
-        let grey = (128.0 + (value - mean) / spread * DETAIL_SPREAD)
-            .round()
-            .clamp(0.0, 255.0) as u8;
+        let grey = (128.0 + (value - mean) / spread * DETAIL_SPREAD).round().clamp(0.0, 255.0) as u8;
         pixel.0 = [grey, grey, grey, 255];
     }
     image
@@ -50,13 +37,9 @@ mod tests {
     fn grey_with_mean_128_and_course_like_spread() {
         let map = detail_map(5, 64);
         let greys: Vec<f64> = map.pixels().map(|p| f64::from(p.0[0])).collect();
-        assert!(
-            map.pixels()
-                .all(|p| p.0[0] == p.0[1] && p.0[1] == p.0[2] && p.0[3] == 255)
-        );
+        assert!(map.pixels().all(|p| p.0[0] == p.0[1] && p.0[1] == p.0[2] && p.0[3] == 255));
         let mean = greys.iter().sum::<f64>() / greys.len() as f64;
-        let spread =
-            (greys.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / greys.len() as f64).sqrt();
+        let spread = (greys.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / greys.len() as f64).sqrt();
         assert!((mean - 128.0).abs() < 0.6, "mean {mean}");
         assert!((spread - 16.0).abs() < 1.0, "spread {spread}");
     }

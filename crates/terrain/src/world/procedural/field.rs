@@ -25,18 +25,14 @@ pub struct Tileable<N> {
 impl<N: NoiseFn<f64, 4>> Tileable<N> {
     /// Wraps `noise` so that about `cells` of its features fit in one period.
     pub fn new(noise: N, cells: f64) -> Self {
-        Self {
-            noise,
-            radius: cells / TAU,
-        }
+        Self { noise, radius: cells / TAU }
     }
 
     /// The noise at (u, v); `get(u + 1, v) == get(u, v + 1) == get(u, v)` up to rounding.
     pub fn get(&self, u: f64, v: f64) -> f64 {
         let (a, b) = (u * TAU, v * TAU);
         let r = self.radius;
-        self.noise
-            .get([r * a.cos(), r * a.sin(), r * b.cos(), r * b.sin()])
+        self.noise.get([r * a.cos(), r * a.sin(), r * b.cos(), r * b.sin()])
     }
 }
 
@@ -48,11 +44,7 @@ pub fn smoothstep(edge0: f64, edge1: f64, x: f64) -> f64 {
 
 /// Linear blend of colours: `a` at t = 0, `b` at t = 1.
 pub fn mix(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
-    [
-        a[0] + (b[0] - a[0]) * t,
-        a[1] + (b[1] - a[1]) * t,
-        a[2] + (b[2] - a[2]) * t,
-    ]
+    [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t]
 }
 
 /// An opaque 8-bit pixel from a colour with channels in 0..=1 (clamped).
@@ -63,19 +55,13 @@ pub fn to_pixel(colour: [f64; 3]) -> [u8; 4] {
 
 /// An image whose pixel (x, y) is `pixel(x, y)`, computed row by row in parallel. The result
 /// does not depend on the number of threads.
-pub fn image_from_fn(
-    width: u32,
-    height: u32,
-    pixel: impl Fn(u32, u32) -> [u8; 4] + Sync,
-) -> RgbaImage {
+pub fn image_from_fn(width: u32, height: u32, pixel: impl Fn(u32, u32) -> [u8; 4] + Sync) -> RgbaImage {
     let mut data = vec![0u8; width as usize * height as usize * 4];
-    data.par_chunks_mut(width as usize * 4)
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (x, out) in row.chunks_exact_mut(4).enumerate() {
-                out.copy_from_slice(&pixel(x as u32, y as u32));
-            }
-        });
+    data.par_chunks_mut(width as usize * 4).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.chunks_exact_mut(4).enumerate() {
+            out.copy_from_slice(&pixel(x as u32, y as u32));
+        }
+    });
     RgbaImage::from_raw(width, height, data).expect("buffer sized width * height * 4")
 }
 
@@ -86,13 +72,11 @@ pub fn grid_from_fn<T: Copy + Default + Send>(
     value: impl Fn(u32, u32) -> T + Sync,
 ) -> Vec<T> {
     let mut data = vec![T::default(); width as usize * height as usize];
-    data.par_chunks_mut(width as usize)
-        .enumerate()
-        .for_each(|(y, row)| {
-            for (x, out) in row.iter_mut().enumerate() {
-                *out = value(x as u32, y as u32);
-            }
-        });
+    data.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.iter_mut().enumerate() {
+            *out = value(x as u32, y as u32);
+        }
+    });
     data
 }
 

@@ -17,11 +17,7 @@ const MAX_HEIGHT: f64 = 2.32;
 
 /// Generates a `size` x `size` island heightmap for `seed`, in grey levels placed with `config`'s
 /// height mapping (the coast is at the level of y = 0). Bit-identical for the same arguments.
-pub fn island_heightmap(
-    seed: u32,
-    size: u32,
-    config: &SceneConfig,
-) -> Result<Heightmap, HeightmapError> {
+pub fn island_heightmap(seed: u32, size: u32, config: &SceneConfig) -> Result<Heightmap, HeightmapError> {
     // Reject bad sizes before the work.
     Heightmap::check_size(size, size)?;
     let warp_x = Fbm::<Perlin>::new(layer_seed(seed, 1)).set_octaves(4);
@@ -43,8 +39,7 @@ pub fn island_heightmap(
         // Signed distance to a ragged coast, in map half-widths: positive inland.
         // A squircle rather than a circle: the island fills more of the square map while its
         // border stays under water.
-        let radius =
-            (qx.powi(4) + qz.powi(4)).sqrt().sqrt() + 0.20 * coast.get([qx * 2.2, qz * 2.2]);
+        let radius = (qx.powi(4) + qz.powi(4)).sqrt().sqrt() + 0.20 * coast.get([qx * 2.2, qz * 2.2]);
         let inland = COAST_RADIUS - radius;
         let hill = hills.get([qx * 2.6, qz * 2.6]);
         let ridge = ((ridges.get([qx * 0.9 + 3.1, qz * 0.9 - 2.3]) + 1.0) * 0.5).max(0.0);
@@ -63,10 +58,7 @@ pub fn island_heightmap(
     });
     // Scale the mountains so that, whatever the seed, the highest peaks (all but the top 0.05% of the map)
     // reach `PEAK_HEIGHT`: every island gets snow-capped summits and none is cut flat.
-    let mut heights: Vec<f64> = elevations
-        .iter()
-        .map(|&(base, mountain)| base + mountain)
-        .collect();
+    let mut heights: Vec<f64> = elevations.iter().map(|&(base, mountain)| base + mountain).collect();
     heights.sort_by(f64::total_cmp);
     let top = heights.len() * 9995 / 10000;
     let (base_at_top, mountain_at_top) = elevations
@@ -114,41 +106,25 @@ mod tests {
             let map = island_heightmap(seed, 128, &config).expect("valid size");
             let sea_level = config.level_of_height(0.0);
             let levels = map.levels();
-            let under =
-                levels.iter().filter(|&&l| l < sea_level).count() as f32 / levels.len() as f32;
-            assert!(
-                (0.25..0.8).contains(&under),
-                "seed {seed}: {under} of the map under water"
-            );
+            let under = levels.iter().filter(|&&l| l < sea_level).count() as f32 / levels.len() as f32;
+            assert!((0.25..0.8).contains(&under), "seed {seed}: {under} of the map under water");
             // The whole border is sea.
             let n = map.columns();
             for i in 0..n {
                 for (row, column) in [(0, i), (n - 1, i), (i, 0), (i, n - 1)] {
-                    assert!(
-                        map.level(row, column) < sea_level,
-                        "seed {seed}: border above water"
-                    );
+                    assert!(map.level(row, column) < sea_level, "seed {seed}: border above water");
                 }
             }
             // The centre region holds land that rises well above the shore.
             let highest = levels.iter().copied().fold(f32::MIN, f32::max);
-            assert!(
-                config.height_of_level(highest) > 1.0,
-                "seed {seed}: flat island"
-            );
+            assert!(config.height_of_level(highest) > 1.0, "seed {seed}: flat island");
         }
     }
 
     #[test]
     fn rejects_sizes_a_heightmap_cannot_have() {
         let config = SceneConfig::default();
-        assert!(matches!(
-            island_heightmap(1, 1, &config),
-            Err(HeightmapError::TooSmall { .. })
-        ));
-        assert!(matches!(
-            island_heightmap(1, 100_000, &config),
-            Err(HeightmapError::TooLarge { .. })
-        ));
+        assert!(matches!(island_heightmap(1, 1, &config), Err(HeightmapError::TooSmall { .. })));
+        assert!(matches!(island_heightmap(1, 100_000, &config), Err(HeightmapError::TooLarge { .. })));
     }
 }

@@ -40,10 +40,7 @@ pub struct ProceduralOptions {
 
 impl Default for ProceduralOptions {
     fn default() -> Self {
-        Self {
-            seed: 1,
-            heightmap_size: 512,
-        }
+        Self { seed: 1, heightmap_size: 512 }
     }
 }
 
@@ -64,13 +61,8 @@ pub enum Stage {
 
 impl Stage {
     /// All stages, in the order they run.
-    pub const ALL: [Stage; 5] = [
-        Stage::Heightmap,
-        Stage::ColourMap,
-        Stage::DetailMap,
-        Stage::Sky,
-        Stage::Water,
-    ];
+    pub const ALL: [Stage; 5] =
+        [Stage::Heightmap, Stage::ColourMap, Stage::DetailMap, Stage::Sky, Stage::Water];
 
     /// A short description, e.g. for a progress line.
     pub fn describe(self) -> &'static str {
@@ -112,13 +104,7 @@ pub fn dress_heightmap(
     let sky = sky_box(seed, SKY_FACE_SIZE, config);
     progress(Stage::Water);
     let water = water_texture(seed, WATER_TEXTURE_SIZE);
-    World {
-        heightmap,
-        colour_map,
-        detail_map,
-        sky,
-        water,
-    }
+    World { heightmap, colour_map, detail_map, sky, water }
 }
 
 #[cfg(test)]
@@ -128,14 +114,9 @@ mod tests {
     #[test]
     fn generate_reports_every_stage_in_order() {
         let mut seen = Vec::new();
-        let options = ProceduralOptions {
-            seed: 1,
-            heightmap_size: 16,
-        };
-        let world = generate(options, &SceneConfig::default(), &mut |stage| {
-            seen.push(stage)
-        })
-        .expect("valid size");
+        let options = ProceduralOptions { seed: 1, heightmap_size: 16 };
+        let world =
+            generate(options, &SceneConfig::default(), &mut |stage| seen.push(stage)).expect("valid size");
         assert_eq!(seen, Stage::ALL);
         assert_eq!(world.heightmap.columns(), 16);
         assert_eq!(world.colour_map.dimensions(), (32, 32));
@@ -144,10 +125,7 @@ mod tests {
 
     #[test]
     fn bad_sizes_are_errors() {
-        let options = ProceduralOptions {
-            seed: 1,
-            heightmap_size: 0,
-        };
+        let options = ProceduralOptions { seed: 1, heightmap_size: 0 };
         assert!(generate(options, &SceneConfig::default(), &mut |_| {}).is_err());
     }
 }

@@ -29,12 +29,7 @@ pub fn sky_box(seed: u32, size: u32, config: &SceneConfig) -> SkyBox {
         })
     };
     SkyBox {
-        sides: [
-            paint(SkyFace::Front),
-            paint(SkyFace::Right),
-            paint(SkyFace::Back),
-            paint(SkyFace::Left),
-        ],
+        sides: [paint(SkyFace::Front), paint(SkyFace::Right), paint(SkyFace::Back), paint(SkyFace::Left)],
         top: paint(SkyFace::Top),
     }
 }
@@ -48,9 +43,7 @@ struct Sky {
 impl Sky {
     fn new(seed: u32) -> Self {
         Self {
-            clouds: Fbm::<Perlin>::new(layer_seed(seed, 40))
-                .set_octaves(6)
-                .set_persistence(0.55),
+            clouds: Fbm::<Perlin>::new(layer_seed(seed, 40)).set_octaves(6).set_persistence(0.55),
             sun: DVec3::from(SUN_DIRECTION).normalize(),
         }
     }
@@ -61,8 +54,7 @@ impl Sky {
         let mut colour = mix(HORIZON, ZENITH, elevation.powf(0.5));
         // Sun: a bright disc inside a wide glow.
         let facing = d.dot(self.sun).max(0.0);
-        let glow =
-            0.35 * facing.powi(8) + 0.6 * facing.powi(64) + smoothstep(0.9993, 0.9997, facing);
+        let glow = 0.35 * facing.powi(8) + 0.6 * facing.powi(64) + smoothstep(0.9993, 0.9997, facing);
         colour = mix(colour, SUN, glow.min(1.0));
         // Clouds on a flat layer above: density from noise at the point the ray meets the layer,
         // thinning toward the horizon where the layer's far parts would only add noise.
@@ -97,18 +89,14 @@ mod tests {
     }
 
     fn distance(a: &image::Rgba<u8>, b: &image::Rgba<u8>) -> f64 {
-        (0..3)
-            .map(|c| (f64::from(a.0[c]) - f64::from(b.0[c])).abs())
-            .sum::<f64>()
-            / 3.0
+        (0..3).map(|c| (f64::from(a.0[c]) - f64::from(b.0[c])).abs()).sum::<f64>() / 3.0
     }
 
     /// Mean colour step between neighbouring columns inside a face: what a seam must not exceed.
     fn inner_step(face: &image::RgbaImage) -> f64 {
         let n = face.width();
-        let steps: f64 = (0..n)
-            .map(|y| distance(face.get_pixel(n / 2, y), face.get_pixel(n / 2 - 1, y)))
-            .sum();
+        let steps: f64 =
+            (0..n).map(|y| distance(face.get_pixel(n / 2, y), face.get_pixel(n / 2 - 1, y))).sum();
         steps / f64::from(n)
     }
 
@@ -118,16 +106,11 @@ mod tests {
         let sky = sky_box(3, n, &SceneConfig::default());
         for i in 0..4 {
             let (left, right) = (&sky.sides[i], &sky.sides[(i + 1) % 4]);
-            let seam: f64 = (0..n)
-                .map(|y| distance(left.get_pixel(n - 1, y), right.get_pixel(0, y)))
-                .sum::<f64>()
-                / f64::from(n);
+            let seam: f64 =
+                (0..n).map(|y| distance(left.get_pixel(n - 1, y), right.get_pixel(0, y))).sum::<f64>()
+                    / f64::from(n);
             let inner = inner_step(left).max(inner_step(right));
-            assert!(
-                seam < 2.0 * inner + 1.0,
-                "sides {i}/{}: seam {seam}, inner {inner}",
-                (i + 1) % 4
-            );
+            assert!(seam < 2.0 * inner + 1.0, "sides {i}/{}: seam {seam}, inner {inner}", (i + 1) % 4);
         }
     }
 
@@ -138,12 +121,8 @@ mod tests {
         let top = &sky.top;
         let last = n - 1;
         // Which top texel touches texel x of each side's top row (see `SkyBox`).
-        let edges: [&dyn Fn(u32) -> (u32, u32); 4] = [
-            &|x| (x, last),
-            &|x| (last, last - x),
-            &|x| (last - x, 0),
-            &|x| (0, x),
-        ];
+        let edges: [&dyn Fn(u32) -> (u32, u32); 4] =
+            [&|x| (x, last), &|x| (last, last - x), &|x| (last - x, 0), &|x| (0, x)];
         for (i, edge) in edges.iter().enumerate() {
             let seam: f64 = (0..n)
                 .map(|x| {
@@ -153,10 +132,7 @@ mod tests {
                 .sum::<f64>()
                 / f64::from(n);
             let inner = inner_step(&sky.sides[i]).max(inner_step(top));
-            assert!(
-                seam < 2.0 * inner + 1.0,
-                "side {i} / top: seam {seam}, inner {inner}"
-            );
+            assert!(seam < 2.0 * inner + 1.0, "side {i} / top: seam {seam}, inner {inner}");
         }
     }
 
@@ -177,10 +153,7 @@ mod tests {
         };
         let (high, low) = (mean_row(0), mean_row(31));
         assert!(high[2] > high[0], "sky top should be blue: {high:?}");
-        assert!(
-            low[0] > high[0],
-            "horizon {low:?} should be paler than {high:?}"
-        );
+        assert!(low[0] > high[0], "horizon {low:?} should be paler than {high:?}");
     }
 
     #[test]

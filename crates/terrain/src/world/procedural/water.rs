@@ -16,10 +16,7 @@ pub fn water_texture(seed: u32, size: u32) -> RgbaImage {
     let ripples_a = Tileable::new(Fbm::<Perlin>::new(layer_seed(seed, 51)).set_octaves(3), 5.0);
     let ripples_b = Tileable::new(Fbm::<Perlin>::new(layer_seed(seed, 52)).set_octaves(3), 7.0);
     image_from_fn(size, size, |x, y| {
-        let (u, v) = (
-            (x as f64 + 0.5) / size as f64,
-            (y as f64 + 0.5) / size as f64,
-        );
+        let (u, v) = ((x as f64 + 0.5) / size as f64, (y as f64 + 0.5) / size as f64);
         // Caustics: where the noise crosses zero, a thin bright line; two layers interleave.
         let line = |n: f64| (1.0 - (n.abs() * 9.0).min(1.0)).powi(3);
         let caustic = (line(ripples_a.get(u, v)) + 0.7 * line(ripples_b.get(u, v))).min(1.0);
@@ -36,14 +33,10 @@ mod tests {
     fn sea_coloured_and_tileable() {
         let water = water_texture(2, 64);
         let n = 64.0 * 64.0;
-        let mean: Vec<f64> = (0..3)
-            .map(|c| water.pixels().map(|p| f64::from(p.0[c])).sum::<f64>() / n)
-            .collect();
+        let mean: Vec<f64> =
+            (0..3).map(|c| water.pixels().map(|p| f64::from(p.0[c])).sum::<f64>() / n).collect();
         // Blue-green: blue and green above red, like the course's SkyBox5.
-        assert!(
-            mean[2] > mean[0] + 30.0 && mean[1] > mean[0] + 30.0,
-            "{mean:?}"
-        );
+        assert!(mean[2] > mean[0] + 30.0 && mean[1] > mean[0] + 30.0, "{mean:?}");
         let grey = |x: u32, y: u32| f64::from(water.get_pixel(x % 64, y % 64).0[1]);
         let inner: f64 = (0..64).map(|y| (grey(32, y) - grey(31, y)).abs()).sum();
         let wrap: f64 = (0..64).map(|y| (grey(0, y) - grey(63, y)).abs()).sum();
