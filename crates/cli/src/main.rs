@@ -5,6 +5,7 @@
 //! errors and progress callbacks into terminal output and exit codes.
 
 mod render;
+mod size;
 mod terrain;
 
 use std::process::ExitCode;

@@ -65,18 +65,9 @@ pub struct RenderArgs {
     pub quiet: bool,
 }
 
-/// Parses `WxH`, e.g. `1280x760`.
+/// Parses `--size`, up to the ray tracer's largest image side.
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (w, h) = text
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 1280x760, not `{text}`"))?;
-    let side = |s: &str| -> Result<u32, String> {
-        match s.trim().parse::<u32>() {
-            Ok(v) if v > 0 => Ok(v),
-            _ => Err(format!("`{s}` is not a positive whole number of pixels")),
-        }
-    };
-    Ok((side(w)?, side(h)?))
+    crate::size::parse_size(text, scene::MAX_IMAGE_SIDE)
 }
 
 /// Runs `rayterra render`.
@@ -223,18 +214,4 @@ fn plural(n: usize) -> &'static str {
 fn fail(message: &str) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::FAILURE
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sizes_parse() {
-        assert_eq!(parse_size("1280x760"), Ok((1280, 760)));
-        assert_eq!(parse_size("64X32"), Ok((64, 32)));
-        assert!(parse_size("1280").is_err());
-        assert!(parse_size("0x10").is_err());
-        assert!(parse_size("ax10").is_err());
-    }
 }

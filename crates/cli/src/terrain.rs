@@ -114,21 +114,7 @@ impl From<BackendArg> for Backend {
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let (width, height) = text
-        .split_once(['x', 'X'])
-        .ok_or_else(|| format!("`{text}` is not a size: expected WIDTHxHEIGHT, e.g. 1280x720"))?;
-    let side = |part: &str| -> Result<u32, String> {
-        let value: u32 = part
-            .trim()
-            .parse()
-            .map_err(|_| format!("`{part}` in `{text}` is not a whole number of pixels"))?;
-        if (1..=MAX_SIDE).contains(&value) {
-            Ok(value)
-        } else {
-            Err(format!("{value} pixels is out of range: sides must be between 1 and {MAX_SIDE}"))
-        }
-    };
-    Ok((side(width)?, side(height)?))
+    crate::size::parse_size(text, MAX_SIDE)
 }
 
 fn parse_pose(text: &str) -> Result<CameraPose, String> {
@@ -329,16 +315,6 @@ fn open_window(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sizes() {
-        assert_eq!(parse_size("1280x720"), Ok((1280, 720)));
-        assert_eq!(parse_size("7X3"), Ok((7, 3)));
-        assert!(parse_size("100000x100000").is_err());
-        assert!(parse_size("0x10").is_err());
-        assert!(parse_size("1280").is_err());
-        assert!(parse_size("axb").is_err());
-    }
 
     #[test]
     fn field_of_view_and_time() {

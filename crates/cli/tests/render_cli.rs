@@ -123,8 +123,9 @@ fn missing_texture_is_an_error_at_its_line() {
 fn bad_requests_are_refused_without_output() {
     let dir = tempfile::tempdir().expect("temp dir");
     std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
-    let cases: [(&[&str], i32, &str); 6] = [
-        (&["render", "scene.txt", "--size", "100000x100000"], 1, "too large"),
+    let cases: [(&[&str], i32, &str); 7] = [
+        (&["render", "scene.txt", "--size", "100000x100000"], 2, "out of range"),
+        (&["render", "scene.txt", "--size", "30000x30000"], 1, "too large"),
         (&["render", "scene.txt", "--size", "12"], 2, "expected WIDTHxHEIGHT"),
         (&["render", "scene.txt", "-o", "out.gif"], 1, "use .png, .bmp, .exr or .hdr"),
         (&["render", "scene.txt", "--spp", "0"], 2, "--spp"),
