@@ -89,8 +89,6 @@ pub struct PreparedScene {
     textures: Vec<Texture>,
     /// For each primitive, the index of its texture.
     texture_of: Vec<Option<u32>>,
-    /// The primitives' shapes, contiguous for the intersection loops.
-    shapes: Vec<Shape>,
     /// BVH over the bounded primitives, when there are more than [`FLAT_LIMIT`].
     bvh: Bvh,
     /// Primitives tested one by one: the unbounded ones (planes), and all bounded ones too when
@@ -159,7 +157,6 @@ impl PreparedScene {
             .collect();
         let magnitudes = scene.primitives.iter().map(|p| p.shape.magnitude()).collect();
         Ok(PreparedScene {
-            shapes: scene.primitives.iter().map(|p| p.shape.clone()).collect(),
             bvh: Bvh::build(&bounded),
             linear,
             magnitudes,
@@ -179,9 +176,9 @@ impl PreparedScene {
             best = Hit::Surface { primitive, hit };
             t_max = hit.t;
         }
-        let shapes = &self.shapes;
+        let prims = &self.scene.primitives;
         self.bvh.closest(ray, 0.0, t_max, |i, limit| {
-            let hit = shapes[i as usize].intersect(ray, 0.0, limit)?;
+            let hit = prims[i as usize].shape.intersect(ray, 0.0, limit)?;
             best = Hit::Surface { primitive: i, hit };
             Some(hit.t)
         });
@@ -200,9 +197,9 @@ impl PreparedScene {
     /// Whether any primitive lies on the ray before distance `t_max` (lights never block).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
-        let shapes = &self.shapes;
+        let prims = &self.scene.primitives;
         self.linear.any(ray, t_max)
-            || self.bvh.any(ray, 0.0, t_max, |i| shapes[i as usize].intersect(ray, 0.0, t_max).is_some())
+            || self.bvh.any(ray, 0.0, t_max, |i| prims[i as usize].shape.intersect(ray, 0.0, t_max).is_some())
     }
 
     /// The rounding-error magnitude of primitive `i` (see [`crate::geometry::offset_origin`]).
