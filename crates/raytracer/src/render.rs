@@ -3,14 +3,18 @@
 //! Adaptive mode (the default) improves on the template's edge resampling: every pixel first takes
 //! one sample at its centre, recording a tag of what it saw (objects along the mirror and
 //! refraction chain, lit point lights) and an estimate of its own noise (from the spread of its
-//! area-light shadow rays and glossy directions). Then every pixel whose tag differs from a
-//! neighbour's (a geometry or shadow edge), whose colour differs from a neighbour's by more than
-//! [`CONTRAST_THRESHOLD`] (a texture or lighting edge), or whose estimated error exceeds
-//! [`NOISE_THRESHOLD`] (a penumbra or a busy glossy reflection) is re-rendered with a jittered
-//! `REFINE_GRID x REFINE_GRID` grid of samples, and a noisy one also with more shadow and glossy
-//! samples, as many more as its error estimate asks for (up to [`MAX_NESTED_FACTOR`] times). (The
-//! template used a fixed 3 x 3 grid, on tag edges only.) Uniform mode takes the same number of
-//! stratified samples in every pixel.
+//! area-light shadow rays and glossy directions). Then:
+//! - every pixel whose tag differs from a neighbour's (a geometry or shadow edge) or whose colour
+//!   differs from a neighbour's by more than [`CONTRAST_THRESHOLD`] (a texture or lighting edge)
+//!   is re-rendered with a jittered `REFINE_GRID x REFINE_GRID` grid of samples, which replaces
+//!   its first sample;
+//! - every other pixel whose estimated error exceeds [`NOISE_THRESHOLD`] (a penumbra or a busy
+//!   glossy reflection) keeps its first sample and adds a small `NOISE_GRID x NOISE_GRID` grid
+//!   whose shadow and glossy samples bring the total to as many as its error estimate asks for
+//!   (up to [`MAX_NESTED_FACTOR`] times the first pass's), the two averaged by their sample counts.
+//!
+//! (The template used a fixed 3 x 3 grid, on tag edges only.) Uniform mode takes the same number
+//! of stratified samples in every pixel.
 //!
 //! Rows are rendered in parallel, but each pixel's random numbers come from its own coordinates,
 //! so the image is the same bit for bit whatever the number of threads.
@@ -30,6 +34,9 @@ use crate::scene::check_image_size;
 
 /// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
 pub const REFINE_GRID: u32 = 4;
+/// Side of the sample grid a pixel refined for noise alone adds to its first sample (4 samples,
+/// enough to spread the extra nested samples over the pixel's area).
+pub const NOISE_GRID: u32 = 2;
 /// Largest per-channel colour difference between neighbours that does not trigger refinement.
 pub const CONTRAST_THRESHOLD: f64 = 0.1;
 /// Largest estimated standard error of a pixel's first-pass colour that does not trigger
@@ -234,7 +241,6 @@ impl<'s> Renderer<'s> {
         let mut refined_pixels = 0;
         if track_tags {
             let flagged = pixels_to_refine(&colors, &traces, w, h);
-            let grid = Strata { nx: REFINE_GRID, ny: REFINE_GRID };
             refined_pixels = flagged.len() as u64;
             let done = AtomicU64::new(0);
             let total = flagged.len() as u64;
@@ -248,7 +254,7 @@ impl<'s> Renderer<'s> {
                         .iter()
                         .map(|r| {
                             let (x, y) = ((r.index % w) as u32, (r.index / w) as u32);
-                            self.pixel(x, y, REFINE_PASS, grid, r.groups, None, &mut rays)
+                            self.pixel(x, y, REFINE_PASS, r.grid, r.groups, None, &mut rays)
                         })
                         .collect();
                     self.rays.fetch_add(rays, Ordering::Relaxed);
@@ -258,9 +264,9 @@ impl<'s> Renderer<'s> {
                 })
                 .collect();
             for (r, c) in flagged.iter().zip(refined) {
-                colors[r.index] = c;
+                colors[r.index] = colors[r.index] * r.first_weight + c * (1.0 - r.first_weight);
             }
-            camera_samples += refined_pixels * grid.count() as u64;
+            camera_samples += flagged.iter().map(|r| r.grid.count() as u64).sum::<u64>();
         }
 
         let pixels = colors.iter().map(|c| c.as_vec3().to_array()).collect();
@@ -320,20 +326,22 @@ struct PixelTrace {
     error: f32,
 }
 
-/// A pixel to refine: its index and how its nested estimates are shared (see
-/// [`Renderer::pixel`]).
+/// A pixel to refine: its index, its camera samples and how their nested estimates are shared
+/// (see [`Renderer::pixel`]), and the weight its first-pass colour keeps in the result.
 struct Refinement {
     index: usize,
+    grid: Strata,
     groups: u32,
+    first_weight: f64,
 }
 
-/// The pixels to refine: a tag different from a 4-neighbour's or a colour differing from a
-/// 4-neighbour's by more than [`CONTRAST_THRESHOLD`] in some channel (an edge: the refined pixel
-/// takes a grid of camera samples), or an estimated error above [`NOISE_THRESHOLD`] (noise: the
-/// refined pixel also takes more nested samples, as many more as the error says it needs, up to
-/// [`MAX_NESTED_FACTOR`] times).
+/// The pixels to refine, in index order: a tag different from a 4-neighbour's or a colour
+/// differing from a 4-neighbour's by more than [`CONTRAST_THRESHOLD`] in some channel (an edge:
+/// a `REFINE_GRID` grid of camera samples replaces the first one), or an estimated error above
+/// [`NOISE_THRESHOLD`] (noise: more nested samples, as many more as the error says it needs, up
+/// to [`MAX_NESTED_FACTOR`] times; an edge pixel takes them in its grid, any other adds them with
+/// a `NOISE_GRID` grid to its first sample).
 fn pixels_to_refine(colors: &[DVec3], traces: &[PixelTrace], w: usize, h: usize) -> Vec<Refinement> {
-    let samples = REFINE_GRID * REFINE_GRID;
     let differs = |a: usize, b: usize| {
         traces[a].tag != traces[b].tag || (colors[a] - colors[b]).abs().max_element() > CONTRAST_THRESHOLD
     };
@@ -347,7 +355,135 @@ fn pixels_to_refine(colors: &[DVec3], traces: &[PixelTrace], w: usize, h: usize)
             // Samples needed to bring the error under the threshold, relative to the first pass.
             let need = (traces[i].error as f64 / NOISE_THRESHOLD).powi(2);
             let factor = if need > 1.0 { (need.ceil() as u32).min(MAX_NESTED_FACTOR) } else { 1 };
-            (edge || factor > 1).then(|| Refinement { index: i, groups: samples.div_ceil(factor) })
+            if edge {
+                // Replace the first pass: its single centre sample would bias the edge.
+                let grid = Strata { nx: REFINE_GRID, ny: REFINE_GRID };
+                Some(Refinement { index: i, grid, groups: grid.count().div_ceil(factor), first_weight: 0.0 })
+            } else if factor > 1 {
+                // Keep the first pass (one share of nested samples) and add `factor - 1` more
+                // shares (or the next count the grid divides into), weighting each by its shares.
+                let grid = Strata { nx: NOISE_GRID, ny: NOISE_GRID };
+                let groups = (grid.count() / (factor - 1)).max(1);
+                let shares = grid.count() as f64 / groups as f64;
+                Some(Refinement { index: i, grid, groups, first_weight: 1.0 / (1.0 + shares) })
+            } else {
+                None
+            }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `w x h` first pass of one colour and tag with no noise.
+    fn flat(w: usize, h: usize) -> (Vec<DVec3>, Vec<PixelTrace>) {
+        (vec![DVec3::splat(0.5); w * h], vec![PixelTrace { tag: 7, error: 0.0 }; w * h])
+    }
+
+    /// Nested samples of a refinement, in units of the first pass's, first pass included.
+    fn shares(r: &Refinement) -> f64 {
+        let added = r.grid.count() as f64 / r.groups as f64;
+        if r.first_weight > 0.0 { 1.0 + added } else { added }
+    }
+
+    #[test]
+    fn a_clean_flat_image_needs_no_refinement() {
+        let (colors, traces) = flat(5, 4);
+        assert!(pixels_to_refine(&colors, &traces, 5, 4).is_empty());
+    }
+
+    #[test]
+    fn a_tag_or_contrast_edge_replaces_both_sides_with_the_full_grid() {
+        let (w, h) = (5, 4);
+        for change in ["tag", "contrast"] {
+            let (mut colors, mut traces) = flat(w, h);
+            let centre = w + 2;
+            match change {
+                "tag" => traces[centre].tag = 8,
+                _ => colors[centre].y += 1.5 * CONTRAST_THRESHOLD,
+            }
+            let flagged = pixels_to_refine(&colors, &traces, w, h);
+            let indices: Vec<usize> = flagged.iter().map(|r| r.index).collect();
+            assert_eq!(indices, [2, w + 1, w + 2, w + 3, 2 * w + 2], "{change}");
+            for r in &flagged {
+                assert_eq!(r.grid, Strata { nx: REFINE_GRID, ny: REFINE_GRID });
+                assert_eq!((r.groups, r.first_weight), (r.grid.count(), 0.0), "no extra nested samples");
+            }
+        }
+    }
+
+    #[test]
+    fn a_small_contrast_is_not_an_edge() {
+        let (mut colors, traces) = flat(3, 3);
+        colors[4].x += 0.9 * CONTRAST_THRESHOLD;
+        assert!(pixels_to_refine(&colors, &traces, 3, 3).is_empty());
+    }
+
+    #[test]
+    fn a_noisy_pixel_gets_as_many_nested_samples_as_its_error_asks_for() {
+        let (w, h) = (3, 3);
+        // Error ratio to the threshold -> samples needed, as a multiple of the first pass's.
+        for (ratio, need) in [(0.99, 1.0f64), (1.2, 1.44), (1.5, 2.25), (1.9, 3.61), (3.0, 9.0)] {
+            let (colors, mut traces) = flat(w, h);
+            traces[4].error = (ratio * NOISE_THRESHOLD) as f32;
+            let flagged = pixels_to_refine(&colors, &traces, w, h);
+            if need <= 1.0 {
+                assert!(flagged.is_empty(), "ratio {ratio}");
+                continue;
+            }
+            let [r] = flagged.as_slice() else { panic!("ratio {ratio}: {} pixels flagged", flagged.len()) };
+            assert_eq!((r.index, r.grid), (4, Strata { nx: NOISE_GRID, ny: NOISE_GRID }));
+            let total = shares(r);
+            assert!(total >= need.min(MAX_NESTED_FACTOR as f64), "ratio {ratio}: {total} shares");
+            assert!(total <= 2.0 * MAX_NESTED_FACTOR as f64, "ratio {ratio}: {total} shares");
+            // The first pass is weighted by its share of the samples.
+            assert!((r.first_weight - 1.0 / total).abs() < 1e-12, "ratio {ratio}");
+        }
+    }
+
+    #[test]
+    fn a_noisy_edge_pixel_takes_its_extra_nested_samples_in_the_full_grid() {
+        let (w, h) = (3, 1);
+        let (colors, mut traces) = flat(w, h);
+        traces[0].tag = 1;
+        traces[0].error = (2.0 * NOISE_THRESHOLD) as f32;
+        let flagged = pixels_to_refine(&colors, &traces, w, h);
+        assert_eq!(flagged.len(), 2);
+        assert_eq!(shares(&flagged[0]), MAX_NESTED_FACTOR as f64);
+        assert_eq!(shares(&flagged[1]), 1.0);
+    }
+
+    /// A rough glossy floor seen from above, reflecting a square light and a ball and lit
+    /// through a penumbra: noise everywhere, no geometric edge in view.
+    const NOISY_SCENE: &str = "camera\n O= 0 0 2\n N= 0 0.3 -1\n lens_W= 0.8\n lens_H= 0.6\n\
+        shade_quality= 1\n drefl_quality= 1\nend\n\
+        light square\n O= 0 1.5 2.5\n Dx= 0.8 0 0\n Dy= 0 0.8 0\n color= 1 1 1\nend\n\
+        primitive plane\n N= 0 0 1\n R= 0\n color= 0.9 0.8 0.7\n diff= 0.5\n refl= 0.5\n drefl= 0.5\nend\n\
+        primitive sphere\n O= 0.2 1.2 1.3\n R= 0.4\n color= 0.2 0.3 0.9\n diff= 0.8\nend\n";
+
+    fn render_noisy(sampling: Sampling) -> Vec<[f32; 3]> {
+        use crate::scene::{SourceFile, parse};
+        let parsed =
+            parse(&SourceFile::from_text("noisy.txt", None, NOISY_SCENE.to_owned())).expect("parses");
+        let scene = PreparedScene::new(parsed.scene, &crate::TextureSearch::default()).expect("prepares");
+        let settings = RenderSettings { width: 48, height: 36, sampling, threads: None, seed: 3 };
+        render(&scene, &settings, &|_| {}).expect("renders").image.pixels().to_vec()
+    }
+
+    fn rms(a: &[[f32; 3]], b: &[[f32; 3]]) -> f64 {
+        let sum: f64 =
+            a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| ((x - y) as f64).powi(2)).sum();
+        (sum / (a.len() * 3) as f64).sqrt()
+    }
+
+    #[test]
+    fn adaptive_sampling_is_closer_to_the_converged_image_than_one_sample_a_pixel() {
+        let reference = render_noisy(Sampling::Uniform(256));
+        let adaptive = rms(&render_noisy(Sampling::Adaptive), &reference);
+        let single = rms(&render_noisy(Sampling::Uniform(1)), &reference);
+        // Refinement must remove a large part of the error, not shift it (a bias would).
+        assert!(adaptive < 0.7 * single, "adaptive {adaptive:.5} against one sample {single:.5}");
+    }
 }
