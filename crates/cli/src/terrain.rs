@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressStyle};
 use terrain::SceneConfig;
 use terrain::camera::{CameraPose, MAX_FIELD_OF_VIEW_DEGREES, MIN_FIELD_OF_VIEW_DEGREES};
+use terrain::controls;
 use terrain::headless::render_image;
 use terrain::render::{Backend, FrameView, Gpu};
 use terrain::window::{self, Notice, WindowOptions};
@@ -16,12 +17,20 @@ use terrain::world::{self as terrain_world, Heightmap, World};
 /// Largest accepted side of `--size`, in pixels (GPUs may allow less; that is checked too).
 const MAX_SIDE: u32 = 16_384;
 
+/// The help text after the options: the window's controls and examples.
+fn after_help() -> String {
+    format!(
+        "Controls:\n{}\nExamples:\n  rayterra terrain\n  rayterra terrain --seed 3\n  \
+         rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  \
+         rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3",
+        controls::help()
+    )
+}
+
 /// Arguments of `rayterra terrain`. With no options it opens a window on the built-in procedural
 /// island; the controls are listed in the help text.
 #[derive(Debug, clap::Args)]
-#[command(
-    after_help = "Controls: W/S forward and back, A/D or Left/Right sideways, Up/Down up and down,\n  Shift faster, mouse to look, scroll wheel to zoom, Tab releases or captures the mouse,\n  F12 or P saves a screenshot (its file name is printed), F11 full screen, Esc quits.\n\nExamples:\n  rayterra terrain\n  rayterra terrain --seed 3\n  rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3"
-)]
+#[command(after_help = after_help())]
 pub struct TerrainArgs {
     /// Load the world from a folder laid out like the course's: heightmap.bmp,
     /// terrain-texture3.bmp, detail.bmp and SkyBox0.bmp..SkyBox5.bmp (four sky walls, the sky
@@ -283,9 +292,7 @@ fn open_window(
         vsync: !args.no_vsync,
         screenshot_dir: PathBuf::from("."),
     };
-    eprintln!(
-        "controls: W/S/A/D and arrows move, Shift faster, mouse looks, scroll zooms, Tab frees the mouse, F12 or P saves a screenshot, F11 full screen, Esc quits"
-    );
+    eprint!("controls:\n{}", controls::help());
     let mut notice = |notice: Notice| match notice {
         Notice::Adapter(adapter) => eprintln!("adapter: {adapter}"),
         Notice::ScreenshotSaved(path) => println!("saved screenshot {}", path.display()),

@@ -4,6 +4,7 @@
 //! - [`world`]: the data to draw (heightmap, textures, sky), loaded or generated. No GPU.
 //! - [`camera`]: the fly camera, a pure state machine fed with input and time.
 //! - [`config`]: the scene's numbers (the course's by default).
+//! - [`controls`]: the window's key bindings, in one table.
 //! - [`render`]: the wgpu renderer, drawing into any texture.
 //! - [`headless`]: one frame off-screen, read back as an image.
 //! - [`window`]: the interactive window (winit), using the same renderer.
@@ -12,6 +13,7 @@
 
 pub mod camera;
 pub mod config;
+pub mod controls;
 pub mod headless;
 pub mod output;
 pub mod render;

@@ -1,9 +1,8 @@
 //! The interactive window: a winit event loop feeding the fly camera and drawing with the same
 //! renderer as the off-screen path.
 //!
-//! Controls: W/S forward and back along the view, A/D and Left/Right sideways, Up/Down in world
-//! y, Shift to go faster, mouse to look, scroll wheel to zoom, Tab to release or capture the
-//! mouse (a click captures it), F12 or P to save a screenshot, F11 for full screen, Esc to quit.
+//! The keys are in [`controls::BINDINGS`]; the mouse looks around while captured, the scroll
+//! wheel zooms.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -11,15 +10,14 @@ use std::time::{Duration, Instant};
 
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
-use winit::event::{
-    DeviceEvent, DeviceId, ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent,
-};
+use winit::event::{DeviceEvent, DeviceId, ElementState, KeyEvent, MouseButton, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
-use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::keyboard::PhysicalKey;
 use winit::window::{CursorGrabMode, Fullscreen, Window, WindowId};
 
-use crate::camera::{CameraPose, FlyCamera, Motion, MotionSettings};
+use crate::camera::{CameraPose, FlyCamera, MotionSettings};
 use crate::config::SceneConfig;
+use crate::controls::{self, Action};
 use crate::headless::OffscreenTarget;
 use crate::output::{SaveError, save_image};
 use crate::render::{Backend, FrameView, Gpu, GpuError, RenderError, Renderer};
@@ -64,6 +62,10 @@ pub enum Notice {
 pub struct WindowSummary {
     /// Frames drawn.
     pub frames: u64,
+    /// Where the camera was when the window closed.
+    pub pose: CameraPose,
+    /// The vertical field of view when the window closed, in degrees.
+    pub field_of_view_degrees: f32,
     /// Wall-clock time from the start of the first frame to the end of the last, in seconds
     /// (setting up the window and the GPU is not counted).
     pub seconds: f64,
@@ -146,6 +148,8 @@ pub fn run(
         Some(error) => Err(error),
         None => Ok(WindowSummary {
             frames: app.frames,
+            pose: app.camera.pose(),
+            field_of_view_degrees: app.camera.field_of_view_degrees(),
             seconds: app
                 .first_frame
                 .zip(app.last_frame_end)
@@ -264,33 +268,24 @@ impl App<'_> {
         let PhysicalKey::Code(code) = event.physical_key else {
             return;
         };
-        let pressed = event.state == ElementState::Pressed;
-        let motion = match code {
-            KeyCode::KeyW => Some(Motion::Forward),
-            KeyCode::KeyS => Some(Motion::Back),
-            KeyCode::KeyA | KeyCode::ArrowLeft => Some(Motion::Left),
-            KeyCode::KeyD | KeyCode::ArrowRight => Some(Motion::Right),
-            KeyCode::ArrowUp => Some(Motion::Up),
-            KeyCode::ArrowDown => Some(Motion::Down),
-            _ => None,
-        };
-        if let Some(motion) = motion {
-            self.camera.set_held(motion, pressed);
+        let Some(action) = controls::action_for(code) else {
             return;
-        }
-        match code {
-            KeyCode::ShiftLeft | KeyCode::ShiftRight => self.camera.set_boost(pressed),
+        };
+        let pressed = event.state == ElementState::Pressed;
+        match action {
+            Action::Move(motion) => self.camera.set_held(motion, pressed),
+            Action::Boost => self.camera.set_boost(pressed),
+            // The others happen once per press.
             _ if !pressed || event.repeat => {}
-            KeyCode::Escape => event_loop.exit(),
-            KeyCode::Tab => self.set_mouse_captured(!self.mouse_captured),
-            KeyCode::F12 | KeyCode::KeyP => self.screenshot(),
-            KeyCode::F11 => {
+            Action::Quit => event_loop.exit(),
+            Action::ToggleMouse => self.set_mouse_captured(!self.mouse_captured),
+            Action::Screenshot => self.screenshot(),
+            Action::FullScreen => {
                 if let Some(running) = &self.running {
                     let full = running.window.fullscreen().is_some();
                     running.window.set_fullscreen((!full).then_some(Fullscreen::Borderless(None)));
                 }
             }
-            _ => {}
         }
     }
 
@@ -445,13 +440,7 @@ impl ApplicationHandler for App<'_> {
             {
                 self.set_mouse_captured(true)
             }
-            WindowEvent::MouseWheel { delta, .. } => {
-                let lines = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y,
-                    MouseScrollDelta::PixelDelta(position) => position.y as f32 / 40.0,
-                };
-                self.camera.zoom(lines);
-            }
+            WindowEvent::MouseWheel { delta, .. } => self.camera.zoom(controls::scroll_lines(delta)),
             WindowEvent::RedrawRequested => self.redraw(event_loop),
             _ => {}
         }

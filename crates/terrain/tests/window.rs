@@ -1,4 +1,5 @@
-//! The window test: opens the window, draws a few frames and exits. Without a display it runs
+//! The window test: opens the window, draws frames, follows real keyboard, mouse and scroll input
+//! (sent by xdotool) and closes on Esc. Without a display it runs
 //! itself again under `xvfb-run -a` (a virtual X server); without `xvfb-run` it is skipped loudly,
 //! or fails under CI. Runs without the test harness: winit wants the main thread.
 
@@ -47,21 +48,91 @@ fn rerun_under_xvfb() {
     }
 }
 
+/// Drives the window with real X input events (xdotool, through the XTEST extension): holds W,
+/// moves the mouse, turns the scroll wheel, then presses Esc. Returns what went wrong, if anything.
+fn drive_input(xdotool: &str) -> Result<(), String> {
+    let script = [
+        "search",
+        "--sync",
+        "--onlyvisible",
+        "--name",
+        "^rayterra terrain",
+        "windowfocus",
+        "--sync",
+        "%1",
+        "mousemove",
+        "--window",
+        "%1",
+        "160",
+        "90",
+        "sleep",
+        "0.3",
+        "keydown",
+        "w",
+        "sleep",
+        "0.6",
+        "keyup",
+        "w",
+        "sleep",
+        "0.2",
+        "mousemove_relative",
+        "--",
+        "60",
+        "0",
+        "sleep",
+        "0.3",
+        "click",
+        "4",
+        "sleep",
+        "0.3",
+        "key",
+        "Escape",
+    ];
+    // `timeout` keeps a stuck search from hanging the test; the window's frame cap ends it too.
+    let output = Command::new("timeout")
+        .arg("60")
+        .arg(xdotool)
+        .args(script)
+        .output()
+        .map_err(|error| format!("cannot run {xdotool}: {error}"))?;
+    if output.status.success() {
+        Ok(())
+    } else {
+        Err(format!("xdotool failed ({}): {}", output.status, String::from_utf8_lossy(&output.stderr)))
+    }
+}
+
+/// `xdotool`, when installed; without it the input half of the test is skipped loudly (a
+/// failure under CI).
+fn find_xdotool() -> Option<String> {
+    let found = Command::new("xdotool").arg("version").output().is_ok_and(|o| o.status.success());
+    if !found {
+        let reason = "xdotool is not installed, so keyboard and mouse input is not tested";
+        assert!(!under_ci(), "CI=true, so this cannot be skipped: {reason}");
+        eprintln!("\n==== SKIPPED part of the window test: {reason} ====\n");
+    }
+    found.then(|| "xdotool".to_owned())
+}
+
 fn opens_draws_and_closes() {
     let config = SceneConfig::default();
     let options = ProceduralOptions { seed: 1, heightmap_size: 64 };
     let world = generate(options, &config, &mut |_| {}).expect("world");
-    let frames = 5;
+    let xdotool = find_xdotool();
+    // Driven by input, the window runs until Esc; the frame cap only stops a test gone wrong.
+    let frames = if xdotool.is_some() { 20_000 } else { 5 };
+    let start = config.camera_start;
     let window_options = WindowOptions {
         backend: Backend::Vulkan,
         size: (320, 180),
-        pose: config.camera_start,
+        pose: start,
         field_of_view_degrees: 45.0,
         start_time_seconds: 0.0,
         max_frames: Some(frames),
         vsync: false,
         screenshot_dir: std::env::temp_dir(),
     };
+    let driver = xdotool.map(|xdotool| std::thread::spawn(move || drive_input(&xdotool)));
     let mut adapter = None;
     let result = window::run(&world, &config, window_options, &mut |notice| {
         if let Notice::Adapter(name) = notice {
@@ -69,10 +140,26 @@ fn opens_draws_and_closes() {
             adapter = Some(name);
         }
     });
+    let driven = driver.map(|thread| thread.join().expect("the input thread panicked"));
     match result {
         Ok(summary) => {
-            assert_eq!(summary.frames, frames);
             assert!(adapter.is_some(), "the adapter was not reported");
+            match driven {
+                None => assert_eq!(summary.frames, frames),
+                Some(Err(error)) => panic!("{error}"),
+                Some(Ok(())) => {
+                    eprintln!("after the input: {summary:?}");
+                    assert!(summary.frames < frames, "Esc did not close the window");
+                    let moved = start.position - summary.pose.position;
+                    // W moves along the view, toward -z from the start pose, by about a unit.
+                    assert!(moved.z > 0.3 && moved.x.abs() < 0.1, "W did not move forward: {moved}");
+                    assert!(
+                        summary.pose.yaw_degrees > 0.5 && summary.pose.yaw_degrees < 90.0,
+                        "the mouse did not turn right"
+                    );
+                    assert!(summary.field_of_view_degrees < 45.0, "the scroll wheel did not zoom in");
+                }
+            }
             println!(
                 "test opens_draws_and_closes ... ok ({} frames in {:.2} s)",
                 summary.frames, summary.seconds
