@@ -1,7 +1,7 @@
 //! The window test: opens the window, draws frames, follows real keyboard, mouse and scroll input
-//! (sent by xdotool) and closes on Esc. Without a display it runs
-//! itself again under `xvfb-run -a` (a virtual X server); without `xvfb-run` it is skipped loudly,
-//! or fails under CI. Runs without the test harness: winit wants the main thread.
+//! (sent by xdotool) and closes on Esc. Without a display it runs itself again under
+//! `xvfb-run -a` (a virtual X server); without `xvfb-run` it is skipped loudly, or fails under CI.
+//! Runs without the test harness: winit wants the main thread.
 
 use std::process::Command;
 
@@ -48,53 +48,21 @@ fn rerun_under_xvfb() {
     }
 }
 
-/// Drives the window with real X input events (xdotool, through the XTEST extension): holds W,
-/// moves the mouse, turns the scroll wheel, then presses Esc. Returns what went wrong, if anything.
-fn drive_input(xdotool: &str) -> Result<(), String> {
-    let script = [
-        "search",
-        "--sync",
-        "--onlyvisible",
-        "--name",
-        "^rayterra terrain",
-        "windowfocus",
-        "--sync",
-        "%1",
-        "mousemove",
-        "--window",
-        "%1",
-        "160",
-        "90",
-        "sleep",
-        "0.3",
-        "keydown",
-        "w",
-        "sleep",
-        "0.6",
-        "keyup",
-        "w",
-        "sleep",
-        "0.2",
-        "mousemove_relative",
-        "--",
-        "60",
-        "0",
-        "sleep",
-        "0.3",
-        "click",
-        "4",
-        "sleep",
-        "0.3",
-        "key",
-        "Escape",
-    ];
+/// What the input test does, as one xdotool command: wait for the window, focus it, hold W, move
+/// the mouse right, turn the scroll wheel away from the user (button 4), press Esc.
+const INPUT_SCRIPT: &str = "search --sync --onlyvisible --name ^rayterra.terrain windowfocus --sync %1 \
+    mousemove --window %1 160 90 sleep 0.3 keydown w sleep 0.6 keyup w sleep 0.2 \
+    mousemove_relative -- 60 0 sleep 0.3 click 4 sleep 0.3 key Escape";
+
+/// Drives the window with real X input events (xdotool, through the XTEST extension) and says
+/// what went wrong, if anything.
+fn drive_input() -> Result<(), String> {
     // `timeout` keeps a stuck search from hanging the test; the window's frame cap ends it too.
     let output = Command::new("timeout")
-        .arg("60")
-        .arg(xdotool)
-        .args(script)
+        .args(["60", "xdotool"])
+        .args(INPUT_SCRIPT.split_whitespace())
         .output()
-        .map_err(|error| format!("cannot run {xdotool}: {error}"))?;
+        .map_err(|error| format!("cannot run xdotool: {error}"))?;
     if output.status.success() {
         Ok(())
     } else {
@@ -102,25 +70,25 @@ fn drive_input(xdotool: &str) -> Result<(), String> {
     }
 }
 
-/// `xdotool`, when installed; without it the input half of the test is skipped loudly (a
+/// Whether xdotool is installed; without it the input half of the test is skipped loudly (a
 /// failure under CI).
-fn find_xdotool() -> Option<String> {
+fn have_xdotool() -> bool {
     let found = Command::new("xdotool").arg("version").output().is_ok_and(|o| o.status.success());
     if !found {
         let reason = "xdotool is not installed, so keyboard and mouse input is not tested";
         assert!(!under_ci(), "CI=true, so this cannot be skipped: {reason}");
         eprintln!("\n==== SKIPPED part of the window test: {reason} ====\n");
     }
-    found.then(|| "xdotool".to_owned())
+    found
 }
 
 fn opens_draws_and_closes() {
     let config = SceneConfig::default();
     let options = ProceduralOptions { seed: 1, heightmap_size: 64 };
     let world = generate(options, &config, &mut |_| {}).expect("world");
-    let xdotool = find_xdotool();
+    let driven = have_xdotool();
     // Driven by input, the window runs until Esc; the frame cap only stops a test gone wrong.
-    let frames = if xdotool.is_some() { 20_000 } else { 5 };
+    let frames = if driven { 20_000 } else { 5 };
     let start = config.camera_start;
     let window_options = WindowOptions {
         backend: Backend::Vulkan,
@@ -132,7 +100,7 @@ fn opens_draws_and_closes() {
         vsync: false,
         screenshot_dir: std::env::temp_dir(),
     };
-    let driver = xdotool.map(|xdotool| std::thread::spawn(move || drive_input(&xdotool)));
+    let driver = driven.then(|| std::thread::spawn(drive_input));
     let mut adapter = None;
     let result = window::run(&world, &config, window_options, &mut |notice| {
         if let Notice::Adapter(name) = notice {
@@ -140,11 +108,11 @@ fn opens_draws_and_closes() {
             adapter = Some(name);
         }
     });
-    let driven = driver.map(|thread| thread.join().expect("the input thread panicked"));
+    let input = driver.map(|thread| thread.join().expect("the input thread panicked"));
     match result {
         Ok(summary) => {
             assert!(adapter.is_some(), "the adapter was not reported");
-            match driven {
+            match input {
                 None => assert_eq!(summary.frames, frames),
                 Some(Err(error)) => panic!("{error}"),
                 Some(Ok(())) => {
