@@ -7,7 +7,8 @@ use winit::keyboard::KeyCode;
 
 use crate::camera::Motion;
 
-/// What a key does.
+/// What a key does. Moving and boosting last while the key is held; the others happen once per
+/// press.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Action {
     /// Move while held.
@@ -22,13 +23,6 @@ pub enum Action {
     FullScreen,
     /// Quit.
     Quit,
-}
-
-impl Action {
-    /// Whether the action lasts while its key is held (rather than happening once per press).
-    pub fn is_held(self) -> bool {
-        matches!(self, Action::Move(_) | Action::Boost)
-    }
 }
 
 /// A row of the controls table: the keys, their names as printed, and what they do.
