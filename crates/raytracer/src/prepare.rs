@@ -8,8 +8,11 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::accel::Bvh;
-use crate::geometry::{Bounds, Cylinder, Plane, Ray, Shape, ShapeHit, ShapePart, Sphere, Square};
+use crate::geometry::{
+    Bounds, Cylinder, Plane, Ray, Shape, ShapeHit, ShapePart, Sphere, Square, offset_origin,
+};
 use crate::light::Light;
+use crate::material::Material;
 use crate::procedural;
 use crate::scene::{Diagnostic, Scene, Severity};
 use crate::texture::{Texture, TextureError, TextureRef, TextureSource};
@@ -208,17 +211,74 @@ impl PreparedScene {
         self.magnitudes[primitive as usize]
     }
 
-    /// The surface colour of primitive `i` at `point` on `part`: its `color=` times its texture.
+    /// The material of primitive `i`.
     #[inline]
-    pub fn surface_color(&self, primitive: u32, point: DVec3, part: ShapePart) -> DVec3 {
-        let p = &self.scene.primitives[primitive as usize];
-        match self.texture_of[primitive as usize] {
+    pub fn material(&self, primitive: u32) -> &Material {
+        &self.scene.primitives[primitive as usize].material
+    }
+
+    /// The shading frame of a hit of `ray` on `primitive`: the point, the normals and the side
+    /// the ray came from. This is everything an integrator needs to know about a surface, whatever
+    /// its shape.
+    #[inline]
+    pub fn interaction(&self, ray: &Ray, primitive: u32, hit: ShapeHit) -> Interaction {
+        let point = ray.at(hit.t);
+        let outward = self.scene.primitives[primitive as usize].shape.outward_normal(point, hit.part);
+        let front = ray.dir.dot(outward) < 0.0;
+        let normal = if front { outward } else { -outward };
+        let magnitude = self.magnitude(primitive).max(point.abs().max_element());
+        Interaction { primitive, t: hit.t, point, outward, normal, front, magnitude, part: hit.part }
+    }
+
+    /// The surface colour at an interaction: the primitive's `color=` times its texture there.
+    #[inline]
+    pub fn surface_color(&self, at: &Interaction) -> DVec3 {
+        let p = &self.scene.primitives[at.primitive as usize];
+        match self.texture_of[at.primitive as usize] {
             Some(t) => {
-                let (u, v) = p.shape.texture_coordinates(point, part);
+                let (u, v) = p.shape.texture_coordinates(at.point, at.part);
                 p.material.color * self.textures[t as usize].sample(u, v)
             }
             None => p.material.color,
         }
+    }
+}
+
+/// A ray's hit on a primitive, as integrators see it (world space, z-up).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interaction {
+    /// Index into `scene.primitives`.
+    pub primitive: u32,
+    /// Distance along the ray (its direction is a unit vector).
+    pub t: f64,
+    /// The hit point.
+    pub point: DVec3,
+    /// Unit normal pointing out of the shape (for a plane or square, the normal of the file).
+    pub outward: DVec3,
+    /// Unit normal on the side the ray came from: `outward` for a front hit, `-outward` for a back
+    /// hit.
+    pub normal: DVec3,
+    /// Whether the ray hit the outside (the side `outward` points to).
+    pub front: bool,
+    /// The rounding-error magnitude that scales the offset of rays leaving the point.
+    pub magnitude: f64,
+    /// The part of the shape that was hit (for its texture coordinates).
+    part: ShapePart,
+}
+
+impl Interaction {
+    /// A ray leaving the point in direction `dir` (normalised here), started just off the surface
+    /// on the side `dir` goes to, so it cannot hit the surface it leaves.
+    #[inline]
+    pub fn spawn(&self, dir: DVec3) -> Ray {
+        let side = if dir.dot(self.normal) >= 0.0 { self.normal } else { -self.normal };
+        Ray::new(offset_origin(self.point, side, self.magnitude), dir)
+    }
+
+    /// The origin of a shadow ray towards the side the ray came from.
+    #[inline]
+    pub fn shadow_origin(&self) -> DVec3 {
+        offset_origin(self.point, self.normal, self.magnitude)
     }
 }
 

@@ -10,9 +10,9 @@ use std::f64::consts::TAU;
 
 use glam::DVec3;
 
-use crate::geometry::{Ray, offset_origin};
+use crate::geometry::Ray;
 use crate::light::Light;
-use crate::prepare::{Hit, PreparedScene};
+use crate::prepare::{Hit, Interaction, PreparedScene};
 use crate::sampler::{PixelRng, Siblings, Strata, hash_values, mix64};
 
 /// Exponent of the highlight lobe `(N.L)^SPEC_POWER`.
@@ -103,18 +103,13 @@ impl<'s> Classic<'s> {
             Hit::Surface { primitive, hit } => (primitive, hit),
         };
         mix_tag(&mut tag, primitive as u64);
-        let prim = &scene.primitives[primitive as usize];
-        let material = &prim.material;
-        let point = ray.at(hit.t);
-        let outward = prim.shape.outward_normal(point, hit.part);
-        let front = ray.dir.dot(outward) < 0.0;
-        let normal = if front { outward } else { -outward };
-        let magnitude = self.scene.magnitude(primitive).max(point.abs().max_element());
-        let surface = SurfacePoint { point, normal, magnitude };
+        let material = self.scene.material(primitive);
+        let surface = self.scene.interaction(ray, primitive, hit);
+        let (normal, front) = (surface.normal, surface.front);
 
         let mut color = DVec3::ZERO;
         if material.has_local() {
-            let base = self.scene.surface_color(primitive, point, hit.part);
+            let base = self.scene.surface_color(&surface);
             color += self.local_light(cx, &surface, base, material.diff, material.spec, depth, sib, &mut tag);
         }
         if material.refl > 0.0 {
@@ -154,7 +149,7 @@ impl<'s> Classic<'s> {
     fn local_light(
         &self,
         cx: &mut TraceContext<'_>,
-        surface: &SurfacePoint,
+        surface: &Interaction,
         base: DVec3,
         diff: f64,
         spec: f64,
@@ -196,12 +191,12 @@ impl<'s> Classic<'s> {
         cx: &mut TraceContext<'_>,
         light: &Light,
         index: usize,
-        surface: &SurfacePoint,
+        surface: &Interaction,
         depth: u32,
         sib: Siblings,
         track_noise: bool,
     ) -> (f64, f64) {
-        let origin = offset_origin(surface.point, surface.normal, surface.magnitude);
+        let origin = surface.shadow_origin();
         let visible = |cx: &mut TraceContext<'_>, target: DVec3| -> bool {
             cx.rays += 1;
             let to = target - origin;
@@ -249,7 +244,7 @@ impl<'s> Classic<'s> {
     fn glossy(
         &self,
         cx: &mut TraceContext<'_>,
-        surface: &SurfacePoint,
+        surface: &Interaction,
         reflected: DVec3,
         drefl: f64,
         depth: u32,
@@ -324,24 +319,6 @@ impl StratumErrors {
             }
         }
         if triples == 0 { 0.0 } else { sum / triples as f64 / k as f64 }
-    }
-}
-
-/// A shading point: position, normal facing the incoming ray, and the magnitude that scales the
-/// offset of rays leaving it.
-struct SurfacePoint {
-    point: DVec3,
-    normal: DVec3,
-    magnitude: f64,
-}
-
-impl SurfacePoint {
-    /// A ray leaving the point in direction `dir`, started just off the surface on the side
-    /// `dir` goes to, so it cannot hit the surface it leaves.
-    #[inline]
-    fn spawn(&self, dir: DVec3) -> Ray {
-        let side = if dir.dot(self.normal) >= 0.0 { self.normal } else { -self.normal };
-        Ray::new(offset_origin(self.point, side, self.magnitude), dir)
     }
 }
 
