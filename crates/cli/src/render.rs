@@ -6,8 +6,10 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::image_io::{OutputFormat, write_image};
+use raytracer::integrator::photon::{self, PhotonStats};
+use raytracer::integrator::{Model, choose_model};
 use raytracer::render::{MAX_SPP, Progress, RenderStats, Stage};
-use raytracer::scene::{self, Diagnostic, SourceFile};
+use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, SourceFile};
 use raytracer::{PreparedScene, RenderSettings, Sampling, TextureSearch};
 
 /// The project's showcase scene, rendered when no scene file is given.
@@ -21,6 +23,7 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render                                   the built-in showcase scene, to render.png\n  \
     rayterra render scene.txt -o scene.png --size 640x380\n  \
     rayterra render scene.txt --textures path/to/textures --spp 16\n  \
+    rayterra render caustics.txt --model photon --photons 500000\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
     /// Scene file in the course scene language; without it, the built-in showcase scene.
@@ -56,6 +59,15 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub seed: u64,
 
+    /// Light-transport model [default: the scene's `algorithm=`, else classic]. classic: the
+    /// course's ray tracer; photon: the course's photon mapper (caustics, indirect light).
+    #[arg(long, value_name = "MODEL", value_parser = parse_model)]
+    pub model: Option<Model>,
+
+    /// Photons to emit (photon model), instead of the scene's `emit_photons=`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_EMITTED_PHOTONS))]
+    pub photons: Option<u64>,
+
     /// Parse and validate the scene (textures included) and print the warnings; render nothing.
     #[arg(long)]
     pub check: bool,
@@ -63,6 +75,14 @@ pub struct RenderArgs {
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// Parses `--model`.
+fn parse_model(text: &str) -> Result<Model, String> {
+    Model::ALL.into_iter().find(|m| m.name() == text).ok_or_else(|| {
+        let names: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
+        format!("unknown model `{text}`; expected one of {}", names.join(", "))
+    })
 }
 
 /// Parses `--size`, up to the ray tracer's largest image side.
@@ -109,6 +129,19 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     }
     settings.threads = args.threads.map(|n| n as usize);
     settings.seed = args.seed;
+    let (model, notes) = choose_model(&prepared.scene, args.model);
+    print_diagnostics(&notes);
+    settings.model = model;
+    settings.photons = args.photons;
+    if args.photons.is_some() && !model.uses_photons() {
+        eprintln!("warning: --photons has no effect on the {} model", model.name());
+    }
+    if model.uses_photons() {
+        photon::check_memory(&settings.photon_settings(&prepared), settings.memory_limit).map_err(|d| {
+            print_diagnostics(&[d]);
+            fail(&format!("`{}` asks for too large a photon map; nothing was rendered", source.name()))
+        })?;
+    }
     scene::check_image_size(settings.width, settings.height).map_err(|m| fail(&m))?;
     let format = OutputFormat::from_path(&args.output).map_err(|e| fail(&e.to_string()))?;
     if format.is_linear() && args.gamma {
@@ -119,12 +152,13 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         if !args.quiet {
             let scene = &prepared.scene;
             println!(
-                "{}: ok ({} primitives, {} lights, {}x{} pixels)",
+                "{}: ok ({} primitives, {} lights, {}x{} pixels, {} model)",
                 source.name(),
                 scene.primitives.len(),
                 scene.lights.len(),
                 settings.width,
-                settings.height
+                settings.height,
+                settings.model.name()
             );
         }
         return Ok(());
@@ -133,6 +167,8 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let bar = progress_bar(args.quiet);
     let report = |p: Progress| {
         let message = match p.stage {
+            Stage::TracingPhotons => "tracing photons",
+            Stage::BuildingPhotonMap => "building map",
             Stage::Tracing => "tracing rows",
             Stage::Refining => "refining pixels",
         };
@@ -152,6 +188,19 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     bar.finish_and_clear();
 
     write_image(&rendered.image, &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
+    if let Some(p) = rendered.stats.photons.filter(|p| p.emitted < p.requested) {
+        eprintln!(
+            "warning: the photon map was full (`max_photons= {}`) after {} of the {} photons; the estimate \
+             still divides by all {} (as the course's renderer does), so the image is about {:.1} times \
+             darker than a map that held them all\n  = note: raise `max_photons=` or lower `emit_photons=` \
+             (or `--photons`)",
+            p.stored,
+            p.emitted,
+            p.requested,
+            p.requested,
+            p.requested as f64 / p.emitted as f64
+        );
+    }
     if !args.quiet {
         print_summary(&args.output, &settings, &rendered.stats, prepare_time, render_time);
     }
@@ -179,9 +228,14 @@ fn print_summary(
     prepare: Duration,
     render: Duration,
 ) {
-    let seconds = render.as_secs_f64().max(1e-9);
-    let rays_per_second = stats.rays as f64 / seconds;
     println!("wrote {}", output.display());
+    // The photon phase is reported on its own line; the pixel phase is the rest.
+    let photon_phase = stats.photons.map_or(Duration::ZERO, |p| p.trace_time + p.build_time);
+    if let Some(p) = &stats.photons {
+        print_photon_summary(p);
+    }
+    let seconds = render.saturating_sub(photon_phase).as_secs_f64().max(1e-9);
+    let rays_per_second = stats.rays as f64 / seconds;
     println!(
         "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
         settings.width,
@@ -197,6 +251,29 @@ fn print_summary(
         stats.rays,
         rays_per_second / 1e6,
         rays_per_second / 1e6 / stats.threads.max(1) as f64
+    );
+    if stats.photons.is_some() {
+        println!(
+            "{} photon-map lookups, {:.2} M lookups/s",
+            stats.lookups,
+            stats.lookups as f64 / seconds / 1e6
+        );
+    }
+}
+
+fn print_photon_summary(p: &PhotonStats) {
+    let trace = p.trace_time.as_secs_f64();
+    let emitted = if p.emitted < p.requested {
+        format!("{} of {} photons emitted (the map was full)", p.emitted, p.requested)
+    } else {
+        format!("{} photons emitted", p.emitted)
+    };
+    println!(
+        "{emitted} in {trace:.2} s ({:.1} M photons/s), {} stored ({}), search tree built in {:.2} s",
+        p.emitted as f64 / trace.max(1e-9) / 1e6,
+        p.stored,
+        photon::format_bytes(p.map_bytes),
+        p.build_time.as_secs_f64()
     );
 }
 

@@ -79,7 +79,7 @@ fn check_validates_without_rendering() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(text(&out.stderr).contains("warning: unknown key `gloss=` in `primitive sphere`; ignored"));
     assert!(
-        text(&out.stdout).contains("scene.txt: ok (3 primitives, 1 lights, 40x30 pixels)"),
+        text(&out.stdout).contains("scene.txt: ok (3 primitives, 1 lights, 40x30 pixels, classic model)"),
         "{}",
         text(&out.stdout)
     );
@@ -88,7 +88,7 @@ fn check_validates_without_rendering() {
     assert!(builtin.status.success(), "{}", text(&builtin.stderr));
     assert!(
         text(&builtin.stdout)
-            .contains("showcase.txt (built in): ok (9 primitives, 1 lights, 1280x760 pixels)")
+            .contains("showcase.txt (built in): ok (9 primitives, 1 lights, 1280x760 pixels, classic model)")
     );
 }
 
@@ -151,4 +151,96 @@ fn help_lists_every_option() {
     {
         assert!(help.contains(option), "{option} missing from:\n{help}");
     }
+}
+
+/// A small scene set up for the course's photon mapper.
+const PHOTON_SCENE: &str = "camera\n O= 0 -4 1\n N= 0 1 0\n image_W= 40\n image_H= 30\n lens_W= 0.8\n lens_H= 0.6\n\
+                            emit_photons= 20000\n sample_photons= 30\nend\n\
+                            light area\n O= 0 0 3\n Dx= 1 0 0\n Dy= 0 1 0\n color= 4 4 4\nend\n\
+                            primitive sphere\n O= 0 0 1\n R= 1\n refr= 1\n rindex= 1.5\nend\n\
+                            primitive plane\n N= 0 0 1\n R= 0\n color= 1 1 1\n diff= 0.8\nend\n";
+
+#[test]
+fn the_photon_model_reports_both_phases() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), PHOTON_SCENE).expect("write scene");
+    let out = rayterra(
+        &["render", "scene.txt", "--model", "photon", "--photons", "5000", "-o", "out.png"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("5000 photons emitted in"), "{stdout}");
+    assert!(stdout.contains("stored") && stdout.contains("search tree built in"), "{stdout}");
+    assert!(stdout.contains("40x30 pixels in") && stdout.contains("photon-map lookups"), "{stdout}");
+    assert!(!text(&out.stderr).contains("warning"), "{}", text(&out.stderr));
+    assert!(dir.path().join("out.png").is_file());
+}
+
+#[test]
+fn photon_keys_under_the_default_model_draw_one_warning() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), PHOTON_SCENE).expect("write scene");
+    let out = rayterra(&["render", "scene.txt", "-q", "-o", "out.png"], dir.path());
+    assert!(out.status.success());
+    let stderr = text(&out.stderr);
+    assert_eq!(stderr.matches("warning:").count(), 1, "{stderr}");
+    assert!(stderr.contains("photon-mapping keys") && stderr.contains("--model photon"), "{stderr}");
+    assert!(stderr.contains("scene.txt:8:1"), "{stderr}");
+    // Chosen on purpose: no warning.
+    let out = rayterra(&["render", "scene.txt", "-q", "--model", "classic", "-o", "out.png"], dir.path());
+    assert!(out.status.success() && out.stderr.is_empty(), "{}", text(&out.stderr));
+}
+
+#[test]
+fn algorithm_picks_the_model_and_unknown_values_are_errors() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let with = |value: &str| {
+        PHOTON_SCENE.replace("sample_photons= 30\n", &format!("sample_photons= 30\n algorithm= {value}\n"))
+    };
+    std::fs::write(dir.path().join("pm.txt"), with("PM")).expect("write scene");
+    let out = rayterra(&["render", "pm.txt", "--check"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("photon model"), "{}", text(&out.stdout));
+    std::fs::write(dir.path().join("sppm.txt"), with("SPPM")).expect("write scene");
+    let out = rayterra(&["render", "sppm.txt", "--check"], dir.path());
+    assert!(text(&out.stderr).contains("`algorithm= SPPM`"), "{}", text(&out.stderr));
+    std::fs::write(dir.path().join("bad.txt"), with("MLT")).expect("write scene");
+    let out = rayterra(&["render", "bad.txt", "-o", "out.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("unknown `algorithm=` `MLT`") && stderr.contains("bad.txt:10:13"), "{stderr}");
+    assert!(!dir.path().join("out.png").exists());
+    let out = rayterra(&["render", "pm.txt", "--model", "wavelets"], dir.path());
+    assert_eq!(out.status.code(), Some(2), "malformed options exit with 2");
+}
+
+#[test]
+fn a_photon_map_over_the_memory_limit_is_refused_at_its_line_before_rendering() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene =
+        PHOTON_SCENE.replace("emit_photons= 20000\n", "emit_photons= 20000\n max_photons= 500000000\n");
+    std::fs::write(dir.path().join("scene.txt"), scene).expect("write scene");
+    for args in [
+        &["render", "scene.txt", "--model", "photon", "--check"][..],
+        &["render", "scene.txt", "--model", "photon"][..],
+    ] {
+        let out = rayterra(args, dir.path());
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains("would need 18.6 GiB of memory, over the limit of 4.0 GiB"), "{stderr}");
+        assert!(stderr.contains("scene.txt:9:"), "{stderr}");
+    }
+    assert!(!dir.path().join("render.png").exists());
+}
+
+#[test]
+fn a_full_photon_map_is_reported() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = PHOTON_SCENE.replace("emit_photons= 20000\n", "emit_photons= 200000\n max_photons= 2000\n");
+    std::fs::write(dir.path().join("scene.txt"), scene).expect("write scene");
+    let out = rayterra(&["render", "scene.txt", "--model", "photon", "-q", "-o", "out.png"], dir.path());
+    assert!(out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("warning: the photon map was full (`max_photons= 2000`)"), "{stderr}");
 }

@@ -22,6 +22,7 @@ pub mod prepare;
 pub mod procedural;
 pub mod render;
 pub mod sampler;
+pub mod sampling;
 pub mod scene;
 pub mod texture;
 

@@ -173,27 +173,31 @@ impl PreparedScene {
     /// The nearest primitive or light shape along the ray.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray) -> Hit {
-        let mut best = Hit::Miss;
-        let mut t_max = f64::INFINITY;
-        if let Some((primitive, hit)) = self.linear.closest(ray, t_max) {
-            best = Hit::Surface { primitive, hit };
-            t_max = hit.t;
-        }
-        let prims = &self.scene.primitives;
-        self.bvh.closest(ray, 0.0, t_max, |i, limit| {
-            let hit = prims[i as usize].shape.intersect(ray, 0.0, limit)?;
-            best = Hit::Surface { primitive: i, hit };
-            Some(hit.t)
-        });
-        if let Hit::Surface { hit, .. } = best {
-            t_max = hit.t;
-        }
+        let (mut best, mut t_max) = match self.closest_surface(ray) {
+            Some((primitive, hit)) => (Hit::Surface { primitive, hit }, hit.t),
+            None => (Hit::Miss, f64::INFINITY),
+        };
         for (light, shape) in &self.emitters {
             if let Some(hit) = shape.intersect(ray, 0.0, t_max) {
                 best = Hit::Emitter { light: *light, t: hit.t };
                 t_max = hit.t;
             }
         }
+        best
+    }
+
+    /// The nearest primitive along the ray, ignoring the lights' shapes (which photons and shadow
+    /// rays pass through).
+    #[inline]
+    pub fn closest_surface(&self, ray: &Ray) -> Option<(u32, ShapeHit)> {
+        let mut best = self.linear.closest(ray, f64::INFINITY);
+        let t_max = best.map_or(f64::INFINITY, |(_, h)| h.t);
+        let prims = &self.scene.primitives;
+        self.bvh.closest(ray, 0.0, t_max, |i, limit| {
+            let hit = prims[i as usize].shape.intersect(ray, 0.0, limit)?;
+            best = Some((i, hit));
+            Some(hit.t)
+        });
         best
     }
 

@@ -26,11 +26,12 @@ use rayon::prelude::*;
 
 use crate::camera::Camera;
 use crate::image_io::Image;
-use crate::integrator::Classic;
 use crate::integrator::classic::TraceContext;
+use crate::integrator::photon::{self, PhotonEstimate, PhotonStats};
+use crate::integrator::{Classic, Model};
 use crate::prepare::{Hit, PreparedScene};
 use crate::sampler::{PixelRng, Siblings, Strata};
-use crate::scene::check_image_size;
+use crate::scene::{Diagnostic, PhotonSettings, check_image_size};
 
 /// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
 pub const REFINE_GRID: u32 = 4;
@@ -47,6 +48,8 @@ pub const NOISE_THRESHOLD: f64 = 2.0 / 255.0;
 pub const MAX_NESTED_FACTOR: u32 = 4;
 /// Largest `--spp`.
 pub const MAX_SPP: u32 = 4096;
+/// The memory a render may use for its photon map unless told otherwise, in bytes (4 GiB).
+pub const DEFAULT_MEMORY_LIMIT: u64 = 4 << 30;
 
 /// How pixels are sampled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,11 +73,27 @@ pub struct RenderSettings {
     pub threads: Option<usize>,
     /// Seed of all random numbers.
     pub seed: u64,
+    /// The light-transport model.
+    pub model: Model,
+    /// Photons to emit, instead of the scene's `emit_photons=` (`--photons`).
+    pub photons: Option<u64>,
+    /// Bytes the render's photon map may use at most.
+    pub memory_limit: u64,
 }
 
 impl RenderSettings {
-    /// The scene file's image size with adaptive sampling; uniform 16 samples when the camera
-    /// has a lens (defocus blur needs samples everywhere, not only on edges).
+    /// The scene's photon settings with this render's overrides.
+    pub fn photon_settings(&self, scene: &PreparedScene) -> PhotonSettings {
+        let mut p = scene.scene.camera.photons.clone();
+        if let Some(n) = self.photons {
+            p.emit_photons = n;
+        }
+        p
+    }
+
+    /// The scene file's image size with adaptive sampling (uniform 16 samples when the camera
+    /// has a lens: defocus blur needs samples everywhere, not only on edges), and the model its
+    /// `algorithm=` names (see [`crate::integrator::choose_model`]).
     pub fn for_scene(scene: &PreparedScene) -> RenderSettings {
         let cam = &scene.scene.camera;
         RenderSettings {
@@ -83,6 +102,9 @@ impl RenderSettings {
             sampling: if cam.aperture > 0.0 { Sampling::Uniform(16) } else { Sampling::Adaptive },
             threads: None,
             seed: 0,
+            model: crate::integrator::choose_model(&scene.scene, None).0,
+            photons: None,
+            memory_limit: DEFAULT_MEMORY_LIMIT,
         }
     }
 }
@@ -90,6 +112,10 @@ impl RenderSettings {
 /// The stage a progress report is about.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
+    /// Tracing photons from the lights (photon model; units are photons).
+    TracingPhotons,
+    /// Building the photon map's search tree (one unit).
+    BuildingPhotonMap,
     /// Tracing every pixel.
     Tracing,
     /// Re-rendering the pixels on edges (adaptive mode).
@@ -118,6 +144,10 @@ pub struct RenderStats {
     pub refined_pixels: u64,
     /// Worker threads used.
     pub threads: usize,
+    /// Photon-map irradiance estimates (photon model).
+    pub lookups: u64,
+    /// The photon map's making (photon model).
+    pub photons: Option<PhotonStats>,
 }
 
 /// A finished render.
@@ -138,6 +168,10 @@ pub enum RenderError {
     /// A sample count out of range.
     #[error("the number of samples per pixel must be from 1 to {MAX_SPP}, not {0}")]
     SampleCount(u32),
+    /// Settings the scene cannot be rendered with (for example a photon map over the memory
+    /// limit), with where in the scene file.
+    #[error("{0}")]
+    Settings(Box<Diagnostic>),
     /// The worker threads could not be started.
     #[error("cannot start {threads} worker threads: {source}")]
     Threads {
@@ -149,7 +183,7 @@ pub enum RenderError {
     },
 }
 
-/// Renders `scene` with the classic model. `progress` is called from worker threads as work
+/// Renders `scene` with the settings' model. `progress` is called from worker threads as work
 /// finishes.
 pub fn render(
     scene: &PreparedScene,
@@ -167,7 +201,25 @@ pub fn render(
         .num_threads(threads)
         .build()
         .map_err(|source| RenderError::Threads { threads, source })?;
-    Ok(pool.install(|| Renderer::new(scene, settings).run(progress)))
+    match settings.model {
+        Model::Classic => {
+            Ok(pool.install(|| Renderer::new(scene, Classic::new(scene), settings).run(progress)))
+        }
+        Model::Photon => {
+            let photon_settings = settings.photon_settings(scene);
+            photon::check_memory(&photon_settings, settings.memory_limit)
+                .map_err(|d| RenderError::Settings(Box::new(d)))?;
+            Ok(pool.install(|| {
+                let report = |done, total| progress(Progress { stage: Stage::TracingPhotons, done, total });
+                let (map, stats) = photon::build_photon_map(scene, &photon_settings, settings.seed, &report);
+                progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
+                let integrator = Classic::with_photons(scene, PhotonEstimate::new(&map, &photon_settings));
+                let mut rendered = Renderer::new(scene, integrator, settings).run(progress);
+                rendered.stats.photons = Some(stats);
+                rendered
+            }))
+        }
+    }
 }
 
 struct Renderer<'s> {
@@ -175,6 +227,7 @@ struct Renderer<'s> {
     camera: Camera,
     settings: &'s RenderSettings,
     rays: AtomicU64,
+    lookups: AtomicU64,
 }
 
 /// Pass numbers, part of each pixel's random seed.
@@ -182,7 +235,7 @@ const FIRST_PASS: u32 = 0;
 const REFINE_PASS: u32 = 1;
 
 impl<'s> Renderer<'s> {
-    fn new(scene: &'s PreparedScene, settings: &'s RenderSettings) -> Renderer<'s> {
+    fn new(scene: &'s PreparedScene, integrator: Classic<'s>, settings: &'s RenderSettings) -> Renderer<'s> {
         let (w, h) = (settings.width, settings.height);
         let cam = &scene.scene.camera;
         // Autofocus (a lens without `focal_dist=`): the distance to the surface at the centre.
@@ -196,10 +249,11 @@ impl<'s> Renderer<'s> {
             1.0
         };
         Renderer {
-            integrator: Classic::new(scene),
+            integrator,
             camera: Camera::new(&scene.scene.camera, w, h, focus),
             settings,
             rays: AtomicU64::new(0),
+            lookups: AtomicU64::new(0),
         }
     }
 
@@ -277,6 +331,8 @@ impl<'s> Renderer<'s> {
                 camera_samples,
                 refined_pixels,
                 threads: rayon::current_num_threads(),
+                lookups: self.lookups.load(Ordering::Relaxed),
+                photons: None,
             },
         }
     }
@@ -313,6 +369,9 @@ impl<'s> Renderer<'s> {
             t.error = (cx.variance / n as f64).sqrt() as f32;
         }
         *rays += cx.rays;
+        if cx.lookups > 0 {
+            self.lookups.fetch_add(cx.lookups, Ordering::Relaxed);
+        }
         sum / n as f64
     }
 }
@@ -468,7 +527,8 @@ mod tests {
         let parsed =
             parse(&SourceFile::from_text("noisy.txt", None, NOISY_SCENE.to_owned())).expect("parses");
         let scene = PreparedScene::new(parsed.scene, &crate::TextureSearch::default()).expect("prepares");
-        let settings = RenderSettings { width: 48, height: 36, sampling, threads: None, seed: 3 };
+        let settings =
+            RenderSettings { width: 48, height: 36, sampling, seed: 3, ..RenderSettings::for_scene(&scene) };
         render(&scene, &settings, &|_| {}).expect("renders").image.pixels().to_vec()
     }
 

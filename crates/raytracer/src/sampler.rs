@@ -31,7 +31,12 @@ pub struct PixelRng {
 impl PixelRng {
     /// The generator of pixel `(x, y)` in pass `pass` of a render seeded with `seed`.
     pub fn new(seed: u64, x: u32, y: u32, pass: u32) -> PixelRng {
-        let key = hash_values(&[seed, x as u64, y as u64, pass as u64]);
+        PixelRng::from_key(hash_values(&[seed, x as u64, y as u64, pass as u64]))
+    }
+
+    /// The generator of the random stream `key` (for example a photon's, hashed from its index
+    /// and the seed).
+    pub fn from_key(key: u64) -> PixelRng {
         PixelRng { rng: Pcg64Mcg::seed_from_u64(key), key }
     }
 

@@ -57,3 +57,9 @@ fn cornell() {
 fn glass_and_light() {
     check("glass-and-light", 160, 90);
 }
+
+/// The course's photon mapper (the file says `algorithm= PM`).
+#[test]
+fn caustics() {
+    check("caustics", 160, 95);
+}

@@ -5,12 +5,18 @@
 //!
 //! It is not physically based (no fall-off, no Fresnel, per-depth clamping): it is what the course's
 //! users expect their scene files to look like.
+//!
+//! The same recursion is the gathering pass of the course's photon mapper (spec section 10): its
+//! camera rays are traced exactly so (mirror, glossy, refraction, visible light shapes), but the
+//! local light of a diffuse hit comes from the photon map instead of shadow rays, and only the
+//! primary ray's result is clamped. [`Classic::with_photons`] makes that variant.
 
 use std::f64::consts::TAU;
 
 use glam::DVec3;
 
 use crate::geometry::Ray;
+use crate::integrator::photon::PhotonEstimate;
 use crate::light::Light;
 use crate::prepare::{Hit, Interaction, PreparedScene};
 use crate::sampler::{PixelRng, Siblings, Strata, hash_values, mix64};
@@ -35,18 +41,29 @@ pub struct TraceContext<'a> {
     /// estimates (area-light shadows, glossy reflections) met along the tagged part of the path:
     /// the adaptive sampler refines pixels whose estimate is visibly noisy.
     pub variance: f64,
+    /// Photon-map lookups made (irradiance estimates).
+    pub lookups: u64,
 }
 
 impl TraceContext<'_> {
     /// A context for one pixel's samples.
     pub fn new(rng: &mut PixelRng) -> TraceContext<'_> {
-        TraceContext { rng, rays: 0, variance: 0.0 }
+        TraceContext { rng, rays: 0, variance: 0.0, lookups: 0 }
     }
+}
+
+/// Where the local light of a hit comes from.
+enum LocalLight<'s> {
+    /// Every light, through shadow rays (the classic model, spec 5.2 and 5.3).
+    Direct,
+    /// The photon map's irradiance estimate (the course's photon mapper, spec section 10).
+    Photons(PhotonEstimate<'s>),
 }
 
 /// The classic integrator over a prepared scene.
 pub struct Classic<'s> {
     scene: &'s PreparedScene,
+    local: LocalLight<'s>,
     shadow_strata: Strata,
     glossy_strata: Strata,
 }
@@ -60,9 +77,18 @@ impl<'s> Classic<'s> {
         let cam = &scene.scene.camera;
         Classic {
             scene,
+            local: LocalLight::Direct,
             shadow_strata: Strata::for_count(SAMPLES_PER_QUALITY * cam.shade_quality),
             glossy_strata: Strata::for_count(SAMPLES_PER_QUALITY * cam.drefl_quality),
         }
+    }
+
+    /// The gathering pass of the course's photon mapper (spec section 10): the local light of a
+    /// hit with `diff > 0` is `color * diff * (background + E)` with `E` the photon map's
+    /// irradiance estimate (no highlight, no shadow rays), and only the primary ray's result is
+    /// clamped to 1.
+    pub fn with_photons(scene: &'s PreparedScene, estimate: PhotonEstimate<'s>) -> Classic<'s> {
+        Classic { local: LocalLight::Photons(estimate), ..Classic::new(scene) }
     }
 
     /// The colour seen along a primary ray, in [0, 1] per channel. `siblings` says how this
@@ -108,9 +134,19 @@ impl<'s> Classic<'s> {
         let (normal, front) = (surface.normal, surface.front);
 
         let mut color = DVec3::ZERO;
-        if material.has_local() {
-            let base = self.scene.surface_color(&surface);
-            color += self.local_light(cx, &surface, base, material.diff, material.spec, depth, sib, &mut tag);
+        match &self.local {
+            LocalLight::Direct if material.has_local() => {
+                let base = self.scene.surface_color(&surface);
+                color +=
+                    self.local_light(cx, &surface, base, material.diff, material.spec, depth, sib, &mut tag);
+            }
+            LocalLight::Photons(estimate) if material.diff > 0.0 => {
+                let base = self.scene.surface_color(&surface);
+                cx.lookups += 1;
+                let irradiance = estimate.irradiance(surface.point, surface.normal);
+                color += base * material.diff * (scene.background.color + irradiance);
+            }
+            _ => {}
         }
         if material.refl > 0.0 {
             let reflected = ray.dir - 2.0 * ray.dir.dot(normal) * normal;
@@ -141,7 +177,10 @@ impl<'s> Classic<'s> {
             }
             color += material.refr * transmitted;
         }
-        color.clamp(DVec3::ZERO, DVec3::ONE)
+        match self.local {
+            LocalLight::Photons(_) if depth > 1 => color,
+            _ => color.clamp(DVec3::ZERO, DVec3::ONE),
+        }
     }
 
     /// Ambient, diffuse and highlight terms (spec 5.2) with shadows (5.3).
@@ -252,9 +291,7 @@ impl<'s> Classic<'s> {
         weight: f64,
         track_noise: bool,
     ) -> DVec3 {
-        let r = reflected.normalize();
-        let b1 = r.cross(DVec3::X).try_normalize().unwrap_or_else(|| r.cross(DVec3::Y).normalize());
-        let b2 = r.cross(b1);
+        let lobe = GlossyLobe::new(reflected, drefl);
         let strata = self.glossy_strata;
         let total = strata.count();
         let k = sib.share(total);
@@ -264,10 +301,7 @@ impl<'s> Classic<'s> {
         for j in 0..k {
             let s = sib.stratum(j, total, shift);
             let (xi, xi2) = strata.sample(s, cx.rng);
-            let rho = (xi as f32).exp2() as f64 - 1.0;
-            // Single precision is ample for a perturbation of at most `drefl`, and twice as fast.
-            let (sin, cos) = (std::f32::consts::TAU * xi2 as f32).sin_cos();
-            let dir = r + drefl * rho * (cos as f64 * b1 + sin as f64 * b2);
+            let dir = lobe.direction(xi, xi2);
             let c = self.trace(cx, &surface.spawn(dir), depth + 2, sib.nested(k, j), None);
             sum += c;
             errors.record(s, c);
@@ -276,6 +310,37 @@ impl<'s> Classic<'s> {
             cx.variance += weight * weight * errors.variance_of_mean(k);
         }
         sum / k as f64
+    }
+}
+
+/// The course's glossy reflection lobe (spec 5.4, `blur= exp`): directions `R + drefl (x b1 + y b2)`
+/// with `(x, y) = rho (cos theta, sin theta)`, `rho = 2^xi - 1`, `theta = 2 pi xi'`, where `b1`,
+/// `b2` are unit vectors perpendicular to the mirror direction `R`. Denser near `R`; not
+/// normalised (the caller's ray normalises it).
+#[derive(Clone, Copy, Debug)]
+pub struct GlossyLobe {
+    r: DVec3,
+    b1: DVec3,
+    b2: DVec3,
+    drefl: f64,
+}
+
+impl GlossyLobe {
+    /// The lobe around the mirror direction `reflected` (any length) of radius `drefl`.
+    #[inline]
+    pub fn new(reflected: DVec3, drefl: f64) -> GlossyLobe {
+        let r = reflected.normalize();
+        let b1 = r.cross(DVec3::X).try_normalize().unwrap_or_else(|| r.cross(DVec3::Y).normalize());
+        GlossyLobe { r, b1, b2: r.cross(b1), drefl }
+    }
+
+    /// The direction for the uniform numbers `xi`, `xi2` in [0, 1).
+    #[inline]
+    pub fn direction(&self, xi: f64, xi2: f64) -> DVec3 {
+        let rho = (xi as f32).exp2() as f64 - 1.0;
+        // Single precision is ample for a perturbation of at most `drefl`, and twice as fast.
+        let (sin, cos) = (std::f32::consts::TAU * xi2 as f32).sin_cos();
+        self.r + self.drefl * rho * (cos as f64 * self.b1 + sin as f64 * self.b2)
     }
 }
 

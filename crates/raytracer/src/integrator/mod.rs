@@ -1,6 +1,83 @@
-//! Shading models. `classic` is the course template's model (spec section 5), the default for
-//! course scene files.
+//! Light-transport models, one module each, over shared sampling code:
+//! - [`classic`]: the course template's model (spec section 5), the default for course files;
+//! - [`photon`]: the course's photon mapper (spec section 10), over the [`photon_map`].
 
 pub mod classic;
+pub mod photon;
+pub mod photon_map;
 
 pub use classic::Classic;
+
+use crate::scene::{Algorithm, Diagnostic, Scene, Severity};
+
+/// The light-transport models.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Model {
+    /// The course template's model (spec section 5).
+    Classic,
+    /// The course's photon mapper (spec section 10).
+    Photon,
+}
+
+impl Model {
+    /// Every model, in the order the help text lists them.
+    pub const ALL: [Model; 2] = [Model::Classic, Model::Photon];
+
+    /// The model's name on the command line (`--model NAME`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::Classic => "classic",
+            Model::Photon => "photon",
+        }
+    }
+
+    /// Whether the model reads the photon map settings of the camera block.
+    pub fn uses_photons(self) -> bool {
+        matches!(self, Model::Photon)
+    }
+}
+
+/// The model a render uses: `requested` (the command line's `--model`) when given, otherwise the
+/// one the scene's `algorithm=` names, otherwise the classic model. Also returns the warnings the
+/// choice calls for: a scene set up for photon mapping rendered by the classic model by default,
+/// and `algorithm=` values whose model this version does not have.
+pub fn choose_model(scene: &Scene, requested: Option<Model>) -> (Model, Vec<Diagnostic>) {
+    let mut notes = Vec::new();
+    let from_file = scene.camera.algorithm.as_ref().map(|(algorithm, location)| match algorithm {
+        Algorithm::RayTracing => Model::Classic,
+        Algorithm::PhotonMapping => Model::Photon,
+        Algorithm::ProgressivePhotonMapping | Algorithm::StochasticProgressivePhotonMapping => {
+            if requested.is_none() {
+                notes.push(Diagnostic {
+                    severity: Severity::Warning,
+                    message: format!(
+                        "`algorithm= {}` names stochastic progressive photon mapping, which this \
+                             version does not have yet; rendering with the course's photon mapper",
+                        algorithm.name()
+                    ),
+                    location: Some(location.clone()),
+                    notes: vec!["choose a model with `--model classic` or `--model photon`".into()],
+                });
+            }
+            Model::Photon
+        }
+    });
+    let model = requested.or(from_file).unwrap_or(Model::Classic);
+    if requested.is_none()
+        && from_file.is_none()
+        && let Some((key, location)) = scene.camera.photons.keys.first()
+    {
+        notes.push(Diagnostic {
+            severity: Severity::Warning,
+            message: format!(
+                "this scene sets photon-mapping keys (`{key}=` ...) but renders with the classic model, \
+                 which does not read them"
+            ),
+            location: Some(location.clone()),
+            notes: vec![
+                "render it with `--model photon` (or set `algorithm= PM` in the camera block)".into(),
+            ],
+        });
+    }
+    (model, notes)
+}

@@ -9,8 +9,8 @@ mod source;
 
 pub use diagnostic::{Diagnostic, Location, Severity};
 pub use parser::{
-    MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_QUALITY, Parsed, SceneError, aspect_mismatch, check_image_size,
-    parse,
+    MAX_EMITTED_PHOTONS, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_QUALITY, MAX_SAMPLE_PHOTONS,
+    MAX_STORED_PHOTONS, Parsed, SceneError, aspect_mismatch, check_image_size, parse,
 };
 pub use source::{ReadError, SourceFile, Span};
 
@@ -96,8 +96,50 @@ pub struct CameraSettings {
     /// Distance to the plane in focus (`focal_dist=`); `None` focuses on the surface seen at
     /// the image centre.
     pub focal_distance: Option<f64>,
-    /// Photon-mapping settings, accepted for a later mode.
+    /// Photon-mapping settings (`max_photons=`, `emit_photons=`, ...), used by the photon models.
     pub photons: PhotonSettings,
+    /// The light-transport model the file asks for (`algorithm=`), and where.
+    pub algorithm: Option<(Algorithm, Location)>,
+}
+
+/// The light-transport model named by the camera key `algorithm=` (students' renderers of the
+/// course chose their algorithm there).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Algorithm {
+    /// `RT`: ray tracing, the classic model.
+    RayTracing,
+    /// `PM`: the course's photon mapper.
+    PhotonMapping,
+    /// `PPM`: progressive photon mapping.
+    ProgressivePhotonMapping,
+    /// `SPPM`: stochastic progressive photon mapping.
+    StochasticProgressivePhotonMapping,
+}
+
+impl Algorithm {
+    /// The values `algorithm=` accepts, as written in scene files.
+    pub const NAMES: [&str; 4] = ["RT", "PM", "PPM", "SPPM"];
+
+    /// The algorithm a value of `algorithm=` names (case-insensitive).
+    pub fn from_name(name: &str) -> Option<Algorithm> {
+        match name.to_ascii_uppercase().as_str() {
+            "RT" => Some(Algorithm::RayTracing),
+            "PM" => Some(Algorithm::PhotonMapping),
+            "PPM" => Some(Algorithm::ProgressivePhotonMapping),
+            "SPPM" => Some(Algorithm::StochasticProgressivePhotonMapping),
+            _ => None,
+        }
+    }
+
+    /// The name as scene files write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Algorithm::RayTracing => "RT",
+            Algorithm::PhotonMapping => "PM",
+            Algorithm::ProgressivePhotonMapping => "PPM",
+            Algorithm::StochasticProgressivePhotonMapping => "SPPM",
+        }
+    }
 }
 
 impl Default for CameraSettings {
@@ -115,22 +157,50 @@ impl Default for CameraSettings {
             aperture: 0.0,
             focal_distance: None,
             photons: PhotonSettings::default(),
+            algorithm: None,
         }
     }
 }
 
-/// Photon-mapping settings of the `camera` block (`max_photons=`, `emit_photons=`,
-/// `sample_photons=`, `sample_dist=`). The classic model does not use them.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Photon-mapping settings of the `camera` block. The classic model does not use them.
+#[derive(Clone, Debug, PartialEq)]
 pub struct PhotonSettings {
-    /// Capacity of the photon map.
+    /// Capacity of the photon map (`max_photons=`): photons stored at most.
     pub max_photons: u64,
-    /// Photons emitted in all.
+    /// Photons emitted in all (`emit_photons=`); in the progressive models, photons a pass.
     pub emit_photons: u64,
-    /// Photons gathered per estimate.
+    /// Photons gathered per estimate (`sample_photons=`).
     pub sample_photons: u64,
-    /// Largest gathering radius.
+    /// Largest gathering radius (`sample_dist=`), in world units; the initial radius of the
+    /// progressive models.
     pub sample_dist: f64,
+    /// Passes of the progressive models (`iterations=`).
+    pub iterations: u64,
+    /// Radius reduction `alpha` of the progressive models (`reduction=`), in (0, 1].
+    pub reduction: f64,
+    /// Most visible points the progressive models keep (`max_hitpoints=`); `None`: no bound
+    /// beyond the memory limit.
+    pub max_hitpoints: Option<u64>,
+    /// The photon keys the file sets, in file order, with where (for diagnostics).
+    pub keys: Vec<(&'static str, Location)>,
+}
+
+impl PhotonSettings {
+    /// The keys of the camera block that only the photon models read.
+    pub const KEYS: [&str; 7] = [
+        "max_photons",
+        "emit_photons",
+        "sample_photons",
+        "sample_dist",
+        "iterations",
+        "reduction",
+        "max_hitpoints",
+    ];
+
+    /// Where the file sets `key=`, if it does.
+    pub fn location_of(&self, key: &str) -> Option<&Location> {
+        self.keys.iter().find(|(k, _)| *k == key).map(|(_, l)| l)
+    }
 }
 
 impl Default for PhotonSettings {
@@ -141,6 +211,10 @@ impl Default for PhotonSettings {
             emit_photons: 1_000_000,
             sample_photons: 100,
             sample_dist: 1.0,
+            iterations: 64,
+            reduction: 2.0 / 3.0,
+            max_hitpoints: None,
+            keys: Vec::new(),
         }
     }
 }

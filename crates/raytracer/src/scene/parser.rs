@@ -13,7 +13,7 @@ use glam::DVec3;
 
 use super::diagnostic::{Diagnostic, Severity};
 use super::source::{SourceFile, Span};
-use super::{Background, CameraSettings, Gradient, PhotonSettings, Primitive, Scene};
+use super::{Algorithm, Background, CameraSettings, Gradient, PhotonSettings, Primitive, Scene};
 use crate::error::GeometryError;
 use crate::geometry::{Cylinder, Plane, Shape, Sphere, Square};
 use crate::light::Light;
@@ -26,6 +26,15 @@ pub const MAX_IMAGE_SIDE: u32 = 32_768;
 pub const MAX_IMAGE_PIXELS: u64 = 8192 * 8192;
 /// Largest `shade_quality=` and `drefl_quality=` (16 times that many samples per hit).
 pub const MAX_QUALITY: u32 = 256;
+/// Largest `max_photons=` and `max_hitpoints=` the parser accepts; the memory they need is checked
+/// against the memory limit before a render.
+pub const MAX_STORED_PHOTONS: u64 = 1 << 40;
+/// Largest `emit_photons=` (ten billion: hours of tracing on one machine).
+pub const MAX_EMITTED_PHOTONS: u64 = 10_000_000_000;
+/// Largest `sample_photons=`.
+pub const MAX_SAMPLE_PHOTONS: u64 = 100_000;
+/// Largest `iterations=`.
+pub const MAX_ITERATIONS: u64 = 1_000_000;
 
 /// A successfully parsed scene with the warnings and notes found on the way.
 #[derive(Clone, Debug)]
@@ -675,21 +684,18 @@ impl<'p, 's> BlockReader<'p, 's> {
         if let Ok(Some(v)) = self.integer("drefl_quality", 1, q) {
             cam.drefl_quality = v as u32;
         }
-        let mut photons = PhotonSettings::default();
-        let big = 1u64 << 40;
-        for (key, slot) in [
-            ("max_photons", &mut photons.max_photons),
-            ("emit_photons", &mut photons.emit_photons),
-            ("sample_photons", &mut photons.sample_photons),
-        ] {
-            if let Ok(Some(v)) = self.integer(key, 0, big) {
-                *slot = v;
+        cam.photons = self.photon_settings();
+        if let Ok(Some((name, span))) = self.text("algorithm") {
+            match Algorithm::from_name(&name) {
+                Some(a) => cam.algorithm = Some((a, self.parser.source.location(span))),
+                None => {
+                    let expected = Algorithm::NAMES.map(|n| format!("`{n}`")).join(", ");
+                    self.error(span, format!("unknown `algorithm=` `{name}`"))
+                        .notes
+                        .push(format!("expected one of {expected}"));
+                }
             }
         }
-        if let Ok(Some(v)) = self.number("sample_dist") {
-            photons.sample_dist = v;
-        }
-        cam.photons = photons;
         if let Ok(Some(a)) = self.number("aperture") {
             if a >= 0.0 {
                 cam.aperture = a;
@@ -711,6 +717,49 @@ impl<'p, 's> BlockReader<'p, 's> {
             self.warning(span, message);
         }
         self.parser.scene.camera = cam;
+    }
+
+    /// The photon-mapping keys of the camera block, validated (spec section 10).
+    fn photon_settings(&mut self) -> PhotonSettings {
+        let mut photons = PhotonSettings::default();
+        let mut keys: Vec<(&'static str, Span)> = PhotonSettings::KEYS
+            .iter()
+            .filter_map(|&k| self.entries.get(k).map(|e| (k, e.key_span)))
+            .collect();
+        keys.sort_by_key(|(_, span)| (span.line, span.column));
+        photons.keys = keys.into_iter().map(|(k, span)| (k, self.parser.source.location(span))).collect();
+        for (key, slot, max) in [
+            ("max_photons", &mut photons.max_photons, MAX_STORED_PHOTONS),
+            ("emit_photons", &mut photons.emit_photons, MAX_EMITTED_PHOTONS),
+            ("sample_photons", &mut photons.sample_photons, MAX_SAMPLE_PHOTONS),
+            ("iterations", &mut photons.iterations, MAX_ITERATIONS),
+        ] {
+            if let Ok(Some(v)) = self.integer(key, 1, max) {
+                *slot = v;
+            }
+        }
+        if let Ok(Some(v)) = self.integer("max_hitpoints", 1, MAX_STORED_PHOTONS) {
+            photons.max_hitpoints = Some(v);
+        }
+        if let Ok(Some(v)) = self.number("sample_dist") {
+            if v > 0.0 {
+                photons.sample_dist = v;
+            } else {
+                let span = self.span_of("sample_dist");
+                self.error(span, "`sample_dist=` (the gathering radius) must be positive");
+            }
+        }
+        if let Ok(Some(v)) = self.number("reduction") {
+            if v > 0.0 && v <= 1.0 {
+                photons.reduction = v;
+            } else {
+                let span = self.span_of("reduction");
+                self.error(span, "`reduction=` (the radius reduction alpha) must lie in (0, 1]")
+                    .notes
+                    .push("2/3, the default, is the usual choice".into());
+            }
+        }
+        photons
     }
 
     fn light(&mut self, kind: LightKind) {
@@ -921,10 +970,7 @@ fn known_keys(kind: BlockKind) -> Vec<&'static str> {
             "image_H",
             "shade_quality",
             "drefl_quality",
-            "max_photons",
-            "emit_photons",
-            "sample_photons",
-            "sample_dist",
+            "algorithm",
             "aperture",
             "focal_dist",
         ],
@@ -937,8 +983,10 @@ fn known_keys(kind: BlockKind) -> Vec<&'static str> {
         BlockKind::Primitive(PrimitiveKind::Cylinder) => &["O1", "O2", "R", "De", "Dc"],
     };
     let mut keys = specific.to_vec();
-    if matches!(kind, BlockKind::Primitive(_)) {
-        keys.extend(MATERIAL_KEYS);
+    match kind {
+        BlockKind::Primitive(_) => keys.extend(MATERIAL_KEYS),
+        BlockKind::Camera => keys.extend(PhotonSettings::KEYS),
+        _ => {}
     }
     keys
 }

@@ -75,11 +75,54 @@ fn camera_keys_and_defaults() {
     assert_eq!((cam.lens_width, cam.lens_height), (1.2, 0.6));
     assert_eq!((cam.image_width, cam.image_height), (640, 320));
     assert_eq!((cam.shade_quality, cam.drefl_quality), (2, 3));
+    let p = &cam.photons;
+    assert_eq!((p.max_photons, p.emit_photons, p.sample_photons, p.sample_dist), (10, 20, 30, 0.5));
+    let keys: Vec<(&str, u32)> = p.keys.iter().map(|(k, l)| (*k, l.span.line)).collect();
     assert_eq!(
-        cam.photons,
-        PhotonSettings { max_photons: 10, emit_photons: 20, sample_photons: 30, sample_dist: 0.5 }
+        keys,
+        [("max_photons", 10), ("emit_photons", 11), ("sample_photons", 12), ("sample_dist", 13)]
     );
     assert_eq!((cam.aperture, cam.focal_distance), (0.05, Some(4.0)));
+    assert_eq!(cam.algorithm, None);
+}
+
+#[test]
+fn photon_mapping_keys_of_the_students_renderers() {
+    let defaults = PhotonSettings::default();
+    assert_eq!((defaults.iterations, defaults.reduction, defaults.max_hitpoints), (64, 2.0 / 3.0, None));
+    for (name, algorithm) in [
+        ("RT", Algorithm::RayTracing),
+        ("PM", Algorithm::PhotonMapping),
+        ("ppm", Algorithm::ProgressivePhotonMapping),
+        ("SPPM", Algorithm::StochasticProgressivePhotonMapping),
+    ] {
+        let text = format!(
+            "camera\n algorithm= {name}\n iterations= 12\n reduction= 0.7\n max_hitpoints= 5000\nend\n{SPHERE}"
+        );
+        let cam = ok(&text).scene.camera;
+        let (a, location) = cam.algorithm.expect("algorithm");
+        assert_eq!((a, location.span.line, location.span.column), (algorithm, 2, 13));
+        let p = &cam.photons;
+        assert_eq!((p.iterations, p.reduction, p.max_hitpoints), (12, 0.7, Some(5000)));
+    }
+}
+
+#[test]
+fn bad_photon_keys_are_errors_at_their_place() {
+    for (line, column, message) in [
+        (" algorithm= MLT", 13, "unknown `algorithm=` `MLT`"),
+        (" emit_photons= 0", 16, "`emit_photons=` must be a whole number from 1"),
+        (" max_photons= -5", 15, "`max_photons=` must be a whole number from 1"),
+        (" sample_photons= 2.5", 18, "`sample_photons=` must be a whole number from 1"),
+        (" sample_dist= 0", 15, "`sample_dist=` (the gathering radius) must be positive"),
+        (" iterations= 0", 14, "`iterations=` must be a whole number from 1"),
+        (" reduction= 1.5", 13, "`reduction=` (the radius reduction alpha) must lie in (0, 1]"),
+        (" max_hitpoints= 0", 17, "`max_hitpoints=` must be a whole number from 1"),
+    ] {
+        let (l, c, m) = single_error(&format!("camera\n{line}\nend\n{SPHERE}"));
+        assert!(m.starts_with(message), "{line}: {m}");
+        assert_eq!((l, c), (2, column), "{line}");
+    }
 }
 
 #[test]

@@ -102,13 +102,14 @@ impl SourceFile {
         Diagnostic {
             severity,
             message: message.into(),
-            location: Some(Location {
-                file: self.name.clone(),
-                span,
-                line_text: self.line(span.line).to_owned(),
-            }),
+            location: Some(self.location(span)),
             notes: Vec::new(),
         }
+    }
+
+    /// The place `span` marks in this file, for a diagnostic made later.
+    pub fn location(&self, span: Span) -> Location {
+        Location { file: self.name.clone(), span, line_text: self.line(span.line).to_owned() }
     }
 }
 

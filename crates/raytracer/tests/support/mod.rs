@@ -48,6 +48,13 @@ pub fn load(path: &Path) -> PreparedScene {
     PreparedScene::new(parsed.scene, &search).unwrap_or_else(|d| panic!("{d:?}"))
 }
 
+/// Parses and prepares scene text (built-in textures only); panics with the diagnostics on error.
+pub fn from_text(text: &str) -> PreparedScene {
+    let parsed = scene::parse(&SourceFile::from_text("test.txt", None, text.to_owned()))
+        .unwrap_or_else(|e| panic!("scene text:\n{e}"));
+    PreparedScene::new(parsed.scene, &TextureSearch::default()).unwrap_or_else(|d| panic!("{d:?}"))
+}
+
 /// Renders `scene` at `width x height` (adaptive sampling unless `spp` is given).
 pub fn render(
     scene: &PreparedScene,
@@ -62,6 +69,7 @@ pub fn render(
         sampling: spp.map_or(Sampling::Adaptive, Sampling::Uniform),
         threads,
         seed: 0,
+        ..RenderSettings::for_scene(scene)
     };
     let rendered = raytracer::render(scene, &settings, &|_: Progress| {}).expect("render");
     rendered.image.to_rgb8(false)
