@@ -27,9 +27,14 @@ impl Heightfield {
         Self {
             columns,
             rows,
-            cell_size: config.terrain_length / columns.max(rows) as f32,
-            heights: heightmap.levels().iter().map(|&level| config.height_of_level(level)).collect(),
+            cell_size: Self::cell_size_of(heightmap, config),
+            heights: heightmap.levels().map(|level| config.height_of_level(level)).collect(),
         }
+    }
+
+    /// Distance between neighbouring samples of `heightmap` placed with `config`, in world units.
+    pub fn cell_size_of(heightmap: &Heightmap, config: &SceneConfig) -> f32 {
+        config.terrain_length / heightmap.columns().max(heightmap.rows()) as f32
     }
 
     /// Samples per row.
