@@ -5,13 +5,13 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use terrain::SceneConfig;
+use terrain::{SceneConfig, Settings};
 use terrain::camera::{CameraPose, MAX_FIELD_OF_VIEW_DEGREES, MIN_FIELD_OF_VIEW_DEGREES};
 use terrain::controls;
 use terrain::headless::render_image;
 use terrain::render::{Backend, FrameView, Gpu};
 use terrain::window::{self, Notice, WindowOptions};
-use terrain::world::procedural::{self, ProceduralOptions, Stage};
+use terrain::world::procedural::{self, ProceduralOptions, Progress, Stage};
 use terrain::world::{self as terrain_world, Heightmap, World};
 
 /// Largest accepted side of `--size`, in pixels (GPUs may allow less; that is checked too).
@@ -203,20 +203,19 @@ fn load_world(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String>
         );
         return Ok(world);
     }
-    let bar = ProgressBar::new(Stage::ALL.len() as u64);
+    let bar = ProgressBar::new(1000);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} generating the world: {msg} [{pos}/{len}]")
+        ProgressStyle::with_template("{spinner} generating the world: {msg} {percent:>3}% [{elapsed}]")
             .unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
     bar.enable_steady_tick(Duration::from_millis(100));
-    let mut progress = |stage: Stage| {
-        let done = Stage::ALL.iter().position(|&s| s == stage).unwrap_or(0);
-        bar.set_position(done as u64);
-        bar.set_message(stage.describe());
+    let mut progress = |progress: Progress| {
+        bar.set_position((progress.overall() * 1000.0).round() as u64);
+        bar.set_message(progress.stage.describe());
     };
     let world = match &args.heightmap {
         Some(path) => {
-            progress(Stage::Heightmap);
+            progress(Progress { stage: Stage::Heightmap, done: 0.0 });
             Heightmap::load(path)
                 .map(|heightmap| procedural::dress_heightmap(heightmap, args.seed, config, &mut progress))
                 .map_err(|error| error.to_string())
@@ -269,7 +268,8 @@ fn screenshot(
     let gpu = open_gpu(args.backend.into())?;
     let view = FrameView { pose, field_of_view_degrees: args.fov, time_seconds: args.time };
     let started = Instant::now();
-    let image = render_image(&gpu, world, config, args.size, &view).map_err(|error| error.to_string())?;
+    let image =
+        render_image(&gpu, world, config, &Settings::default(), args.size, &view).map_err(|error| error.to_string())?;
     terrain::output::save_frame(&image, out).map_err(|error| error.to_string())?;
     eprintln!("rendered in {}", seconds(started.elapsed()));
     println!("wrote {} ({}x{})", out.display(), args.size.0, args.size.1);
@@ -291,6 +291,7 @@ fn open_window(
         max_frames: args.frames,
         vsync: !args.no_vsync,
         screenshot_dir: PathBuf::from("."),
+        settings: Settings::default(),
     };
     eprint!("controls:\n{}", controls::help());
     let mut notice = |notice: Notice| match notice {

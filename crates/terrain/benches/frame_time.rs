@@ -55,7 +55,7 @@ fn main() {
             continue;
         };
         let setup = Instant::now();
-        let mut headless = match HeadlessRenderer::new(&gpu, &world, &config, SIZE.0, SIZE.1) {
+        let mut headless = match HeadlessRenderer::new(&gpu, &world, &config, &terrain::Settings::course(), SIZE.0, SIZE.1) {
             Ok(headless) => headless,
             Err(error) => {
                 println!("{name:<20} cannot render: {error}");

@@ -6,6 +6,7 @@ use std::sync::mpsc;
 use image::RgbaImage;
 
 use crate::config::SceneConfig;
+use crate::settings::Settings;
 use crate::render::{FrameView, Gpu, GpuError, RenderError, Renderer, TEXTURE_FORMAT};
 use crate::world::World;
 
@@ -130,17 +131,19 @@ pub struct HeadlessRenderer {
 }
 
 impl HeadlessRenderer {
-    /// Uploads `world` (laid out with `config`) and creates a `width` x `height` target.
+    /// Uploads `world` (laid out with `config`) for the look of `settings` and creates a
+    /// `width` x `height` target.
     pub fn new(
         gpu: &Gpu,
         world: &World,
         config: &SceneConfig,
+        settings: &Settings,
         width: u32,
         height: u32,
     ) -> Result<Self, RenderError> {
         check_frame_size(gpu, width, height)?;
         Ok(Self {
-            renderer: Renderer::new(gpu, world, config, TEXTURE_FORMAT)?,
+            renderer: Renderer::new(gpu, world, config, settings, TEXTURE_FORMAT)?,
             target: OffscreenTarget::new(gpu, TEXTURE_FORMAT, width, height)?,
         })
     }
@@ -148,6 +151,11 @@ impl HeadlessRenderer {
     /// The renderer (e.g. for statistics of the last frame).
     pub fn renderer(&self) -> &Renderer {
         &self.renderer
+    }
+
+    /// The renderer, e.g. to change its settings.
+    pub fn renderer_mut(&mut self) -> &mut Renderer {
+        &mut self.renderer
     }
 
     /// Draws `view` and waits for the GPU to finish, without reading the image back (what a
@@ -166,13 +174,15 @@ impl HeadlessRenderer {
     }
 }
 
-/// Renders one frame of `world` off-screen on `gpu`: the whole headless path in one call.
+/// Renders one frame of `world` off-screen on `gpu` with `settings`: the whole headless path in
+/// one call.
 pub fn render_image(
     gpu: &Gpu,
     world: &World,
     config: &SceneConfig,
+    settings: &Settings,
     (width, height): (u32, u32),
     view: &FrameView,
 ) -> Result<RgbaImage, RenderError> {
-    HeadlessRenderer::new(gpu, world, config, width, height)?.render(gpu, view)
+    HeadlessRenderer::new(gpu, world, config, settings, width, height)?.render(gpu, view)
 }

@@ -4,6 +4,7 @@
 //! - [`world`]: the data to draw (heightmap, textures, sky), loaded or generated. No GPU.
 //! - [`camera`]: the fly camera, a pure state machine fed with input and time.
 //! - [`config`]: the scene's numbers (the course's by default).
+//! - [`settings`]: how a frame looks (the course's look or the modern one, and its tunables).
 //! - [`controls`]: the window's key bindings, in one table.
 //! - [`render`]: the wgpu renderer, drawing into any texture.
 //! - [`headless`]: one frame off-screen, read back as an image.
@@ -17,7 +18,9 @@ pub mod controls;
 pub mod headless;
 pub mod output;
 pub mod render;
+pub mod settings;
 pub mod window;
 pub mod world;
 
 pub use config::SceneConfig;
+pub use settings::{Look, Settings};

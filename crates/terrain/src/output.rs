@@ -78,6 +78,22 @@ pub fn save_image(image: &DynamicImage, path: &Path, format: ImageFormat) -> Res
     result
 }
 
+/// Writes `bytes` to `path`, atomically like [`save_image`].
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
+    let io_error = |source| SaveError::Io { path: path.to_path_buf(), source };
+    let folder = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().map_or_else(|| "file".into(), |name| name.to_string_lossy().into_owned());
+    let temporary = folder.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = std::fs::write(&temporary, bytes).and_then(|()| std::fs::rename(&temporary, path));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    result.map_err(io_error)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -21,6 +21,7 @@ use crate::controls::{self, Action};
 use crate::headless::OffscreenTarget;
 use crate::output::{SaveError, save_image};
 use crate::render::{Backend, FrameView, Gpu, GpuError, RenderError, Renderer};
+use crate::settings::Settings;
 use crate::world::{Heightfield, World};
 
 /// How to open the window.
@@ -42,6 +43,8 @@ pub struct WindowOptions {
     pub vsync: bool,
     /// Folder where screenshots are saved.
     pub screenshot_dir: PathBuf,
+    /// How the frames look, at start.
+    pub settings: Settings,
 }
 
 /// Something the user should hear about while the window runs.
@@ -238,7 +241,7 @@ impl App<'_> {
             view_formats: if view_format == format { Vec::new() } else { vec![view_format] },
         };
         surface.configure(&gpu.device, &surface_config);
-        let renderer = Renderer::new(&gpu, self.world, self.config, view_format)?;
+        let renderer = Renderer::new(&gpu, self.world, self.config, &self.options.settings, view_format)?;
         Ok(Running { window, surface, surface_config, gpu, renderer })
     }
 

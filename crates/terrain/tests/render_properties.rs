@@ -6,7 +6,7 @@ mod common;
 
 use common::{gpu, marker_world, project, render, view_from};
 use image::{Rgba, RgbaImage};
-use terrain::SceneConfig;
+use terrain::{SceneConfig, Settings};
 use terrain::headless::OffscreenTarget;
 use terrain::render::{Backend, Renderer};
 
@@ -140,7 +140,8 @@ fn a_bgra_target_reads_back_as_rgba() {
     let view = view_from([-8.0, 1.5, 6.0], 120.0, -12.0);
     let expected = render(gpu, &world, SIZE, &view);
     let format = wgpu::TextureFormat::Bgra8Unorm;
-    let mut renderer = Renderer::new(gpu, &world, &SceneConfig::default(), format).expect("renderer");
+    let mut renderer =
+        Renderer::new(gpu, &world, &SceneConfig::default(), &Settings::course(), format).expect("renderer");
     let target = OffscreenTarget::new(gpu, format, SIZE.0, SIZE.1).expect("target");
     renderer.draw(gpu, target.view(), SIZE, &view);
     let image = target.read(gpu).expect("read back");

@@ -99,6 +99,7 @@ fn opens_draws_and_closes() {
         max_frames: Some(frames),
         vsync: false,
         screenshot_dir: std::env::temp_dir(),
+        settings: terrain::Settings::course(),
     };
     let driver = driven.then(|| std::thread::spawn(drive_input));
     let mut adapter = None;

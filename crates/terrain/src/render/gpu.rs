@@ -148,9 +148,11 @@ impl Gpu {
             apply_limit_buckets: false,
         }))
         .map_err(|error| GpuError::NoAdapter { backend, reason: error.to_string() })?;
+        // Wireframe where the GPU can draw lines (the tuning panel's switch).
+        let optional = wgpu::Features::POLYGON_MODE_LINE;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("rayterra terrain"),
-            required_features: wgpu::Features::empty(),
+            required_features: adapter.features() & optional,
             required_limits: adapter.limits(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -175,6 +177,11 @@ impl Gpu {
     /// The adapter's name, driver and API, e.g. `llvmpipe (LLVM 19.1.7, 256 bits) [Vulkan, Cpu]`.
     pub fn describe(&self) -> String {
         describe(&self.adapter.get_info())
+    }
+
+    /// Whether the device can draw the terrain's triangle edges (wireframe).
+    pub fn has_wireframe(&self) -> bool {
+        self.device.features().contains(wgpu::Features::POLYGON_MODE_LINE)
     }
 
     /// Whether the adapter is a software rasteriser (e.g. Mesa's lavapipe or llvmpipe).

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use image::{Rgba, RgbaImage};
-use terrain::SceneConfig;
+use terrain::{SceneConfig, Settings};
 use terrain::camera::CameraPose;
 use terrain::headless::render_image;
 use terrain::render::{Backend, FrameView, Gpu};
@@ -78,9 +78,14 @@ pub fn view_from(position: [f32; 3], yaw: f32, pitch: f32) -> FrameView {
     }
 }
 
-/// Renders `world` with the course's numbers.
+/// Renders `world` with the course's numbers, in the course's look.
 pub fn render(gpu: &Gpu, world: &World, size: (u32, u32), view: &FrameView) -> RgbaImage {
-    render_image(gpu, world, &SceneConfig::default(), size, view).expect("renders")
+    render_with(gpu, world, &Settings::course(), size, view)
+}
+
+/// Renders `world` with the course's numbers and `settings`.
+pub fn render_with(gpu: &Gpu, world: &World, settings: &Settings, size: (u32, u32), view: &FrameView) -> RgbaImage {
+    render_image(gpu, world, &SceneConfig::default(), settings, size, view).expect("renders")
 }
 
 fn flat(colour: [u8; 3], size: u32) -> RgbaImage {
@@ -101,6 +106,7 @@ pub fn marker_world(detail_grey: u8) -> World {
         detail_map: flat([detail_grey; 3], 16),
         sky: SkyBox { sides: [green.clone(), green.clone(), green.clone(), green.clone()], top: green },
         water: flat([0, 0, 255], 8),
+        unlit: None,
     }
 }
 
