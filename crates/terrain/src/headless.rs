@@ -6,8 +6,8 @@ use std::sync::mpsc;
 use image::RgbaImage;
 
 use crate::config::SceneConfig;
-use crate::settings::Settings;
 use crate::render::{FrameView, Gpu, GpuError, RenderError, Renderer, TEXTURE_FORMAT};
+use crate::settings::Settings;
 use crate::world::World;
 
 /// Checks that `width` x `height` can be rendered on `gpu`: both sides between 1 and the GPU's

@@ -9,6 +9,7 @@
 //! - [`render`]: the wgpu renderer, drawing into any texture.
 //! - [`headless`]: one frame off-screen, read back as an image.
 //! - [`window`]: the interactive window (winit), using the same renderer.
+//! - [`panel`]: the window's tuning panel (egui, F1).
 //!
 //! The library never prints, exits or parses command lines: it returns values and typed errors.
 
@@ -17,6 +18,7 @@ pub mod config;
 pub mod controls;
 pub mod headless;
 pub mod output;
+pub mod panel;
 pub mod render;
 pub mod settings;
 pub mod window;

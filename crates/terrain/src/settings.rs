@@ -68,8 +68,12 @@ pub enum ReflectionQuality {
 
 impl ReflectionQuality {
     /// Every choice, from the cheapest.
-    pub const ALL: [ReflectionQuality; 4] =
-        [ReflectionQuality::Off, ReflectionQuality::Quarter, ReflectionQuality::Half, ReflectionQuality::Full];
+    pub const ALL: [ReflectionQuality; 4] = [
+        ReflectionQuality::Off,
+        ReflectionQuality::Quarter,
+        ReflectionQuality::Half,
+        ReflectionQuality::Full,
+    ];
 
     /// The reflection's size as a fraction of the frame's width and height (0 when off).
     pub fn scale(self) -> f32 {
@@ -314,7 +318,8 @@ impl Settings {
             }
         }
         if let Some(view) = &self.view {
-            for (key, value) in ["view.position[0]", "view.position[1]", "view.position[2]"].iter().zip(view.position)
+            for (key, value) in
+                ["view.position[0]", "view.position[1]", "view.position[2]"].iter().zip(view.position)
             {
                 ranges.push((key, f(value), -1e6, 1e6));
             }
@@ -328,8 +333,10 @@ impl Settings {
 
     /// Parses settings from TOML `text`; `path` names the source in errors.
     pub fn from_toml(text: &str, path: &Path) -> Result<Self, SettingsError> {
-        let settings: Settings = toml::from_str(text)
-            .map_err(|error| SettingsError::Syntax { path: path.to_path_buf(), message: error.to_string() })?;
+        let settings: Settings = toml::from_str(text).map_err(|error| SettingsError::Syntax {
+            path: path.to_path_buf(),
+            message: error.to_string(),
+        })?;
         for (key, value, min, max) in settings.ranges() {
             if !(min..=max).contains(&value) {
                 return Err(SettingsError::Range { path: path.to_path_buf(), key, value, min, max });
@@ -353,7 +360,8 @@ impl Settings {
 
     /// Writes the settings to a TOML file, whole or not at all.
     pub fn save(&self, path: &Path) -> Result<(), SaveError> {
-        let text = format!("# rayterra terrain settings (rayterra terrain --settings FILE)\n{}", self.to_toml());
+        let text =
+            format!("# rayterra terrain settings (rayterra terrain --settings FILE)\n{}", self.to_toml());
         write_file(path, text.as_bytes())
     }
 }
@@ -364,8 +372,7 @@ mod tests {
 
     #[test]
     fn round_trips_through_toml() {
-        let mut settings = Settings::default();
-        settings.look = Look::Course;
+        let mut settings = Settings { look: Look::Course, ..Settings::default() };
         settings.sun.elevation_degrees = 4.5;
         settings.water.reflection = ReflectionQuality::Quarter;
         settings.view = Some(ViewSettings {
@@ -391,7 +398,8 @@ mod tests {
 
     #[test]
     fn errors_name_the_file_the_key_and_the_place() {
-        let error = Settings::from_toml("[fog]\ndensty = 0.1\n", Path::new("my.toml")).expect_err("unknown key");
+        let error =
+            Settings::from_toml("[fog]\ndensty = 0.1\n", Path::new("my.toml")).expect_err("unknown key");
         let text = error.to_string();
         assert!(text.contains("my.toml") && text.contains("densty") && text.contains("line 2"), "{text}");
         let error = Settings::from_toml("[fog]\ndensity = 7\n", Path::new("my.toml")).expect_err("range");

@@ -6,9 +6,9 @@ mod common;
 
 use common::{gpu, marker_world, project, render, view_from};
 use image::{Rgba, RgbaImage};
-use terrain::{SceneConfig, Settings};
 use terrain::headless::OffscreenTarget;
 use terrain::render::{Backend, Renderer};
+use terrain::{SceneConfig, Settings};
 
 const SIZE: (u32, u32) = (160, 96);
 

@@ -31,9 +31,14 @@ pub struct CourseLook {
 #[derive(Debug)]
 enum CourseLand {
     /// The static mesh, cut at the waterline.
-    Mesh(LandPass),
+    Mesh(Box<LandPass>),
     /// The GPU grid (its resources are the renderer's), with these pipelines and group.
-    Grid { pipelines: PipelinePair, wireframe: Option<PipelinePair>, layout: wgpu::BindGroupLayout, group: wgpu::BindGroup },
+    Grid {
+        pipelines: PipelinePair,
+        wireframe: Option<PipelinePair>,
+        layout: wgpu::BindGroupLayout,
+        group: wgpu::BindGroup,
+    },
 }
 
 impl CourseLook {
@@ -54,14 +59,16 @@ impl CourseLook {
             None => {
                 let land = LandPass::new(context, world, config, multi_draw)?;
                 gpu_bytes = (land.gpu_bytes().0, gpu_bytes.1 + land.gpu_bytes().1);
-                CourseLand::Mesh(land)
+                CourseLand::Mesh(Box::new(land))
             }
             Some(grid) => {
                 let colour = upload_view(context, "colour map", &world.colour_map)?;
                 let detail = upload_view(context, "detail map", &world.detail_map)?;
-                gpu_bytes.1 += (world.colour_map.as_raw().len() + world.detail_map.as_raw().len()) as u64 * 4 / 3;
+                gpu_bytes.1 +=
+                    (world.colour_map.as_raw().len() + world.detail_map.as_raw().len()) as u64 * 4 / 3;
                 // The course's shading has no light map: the detail map stands in for it.
-                let (layout, group) = grid.land_group(context.device, "land (course)", &colour, &detail, &detail);
+                let (layout, group) =
+                    grid.land_group(context.device, "land (course)", &colour, &detail, &detail);
                 let pipelines = grid_pipelines(context, &layout, wgpu::PolygonMode::Fill);
                 CourseLand::Grid { pipelines, wireframe: None, layout, group }
             }
@@ -109,7 +116,13 @@ fn grid_pipelines(
     let buffers = GridTerrain::buffer_layouts();
     let layouts = [layout];
     let source = shader_source!("heights.wgsl", "grid.wgsl", "grid_course.wgsl");
-    pipelines(context, &PipelineSpec { polygon_mode, ..PipelineSpec::new("land (course, grid)", source, &layouts, &buffers) })
+    pipelines(
+        context,
+        &PipelineSpec {
+            polygon_mode,
+            ..PipelineSpec::new("land (course, grid)", source, &layouts, &buffers)
+        },
+    )
 }
 
 impl Renderer {

@@ -62,11 +62,17 @@ pub(super) fn begin_pass<'a>(
             view: target,
             depth_slice: None,
             resolve_target: None,
-            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                store: wgpu::StoreOp::Store,
+            },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: depth,
-            depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
             stencil_ops: None,
         }),
         timestamp_writes: None,
@@ -98,7 +104,9 @@ impl Renderer {
             Look::Modern => self.settings.water.reflection.scale(),
         };
         let mut stats = FrameStats::default();
-        if let Some(land) = self.course.as_mut().filter(|_| self.settings.look == Look::Course).and_then(|c| c.mesh()) {
+        if let Some(land) =
+            self.course.as_mut().filter(|_| self.settings.look == Look::Course).and_then(|c| c.mesh())
+        {
             let lod = |mirrored| LodView { eye, frustum, pixels_per_unit, max_error_pixels, mirrored };
             land.prepare(&gpu.queue, [&lod(false), &lod(true)]);
             stats.terrain_triangles = land.triangles_chosen();

@@ -83,7 +83,12 @@ impl GridTerrain {
         let (columns, rows) = (heightmap.columns(), heightmap.rows());
         let max = device.limits().max_texture_dimension_2d;
         if columns > max || rows > max {
-            return Err(RenderError::TextureSize { what: "heightmap".into(), width: columns, height: rows, max });
+            return Err(RenderError::TextureSize {
+                what: "heightmap".into(),
+                width: columns,
+                height: rows,
+                max,
+            });
         }
         let field_cell = Heightfield::cell_size_of(heightmap, config);
         let extent = [columns as f32 * field_cell, rows as f32 * field_cell];
@@ -158,7 +163,11 @@ impl GridTerrain {
 
     /// The bind group of the heights alone (group 1 of `heights.wgsl`).
     pub fn heights_group(&self, device: &wgpu::Device) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
-        bind_group(device, "heights", &[Binding::Uniform(&self.uniforms), Binding::UintTexture(&self.heights)])
+        bind_group(
+            device,
+            "heights",
+            &[Binding::Uniform(&self.uniforms), Binding::UintTexture(&self.heights)],
+        )
     }
 
     /// The bind group of the land drawn with `colour` and `detail` maps and a `light` map (the
@@ -192,7 +201,11 @@ impl GridTerrain {
         const CORNER: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![0 => Uint8x4];
         const NODE: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![1 => Uint32x4];
         [
-            wgpu::VertexBufferLayout { array_stride: 4, step_mode: wgpu::VertexStepMode::Vertex, attributes: &CORNER },
+            wgpu::VertexBufferLayout {
+                array_stride: 4,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &CORNER,
+            },
             wgpu::VertexBufferLayout {
                 array_stride: size_of::<Patch>() as u64,
                 step_mode: wgpu::VertexStepMode::Instance,
@@ -236,7 +249,11 @@ impl GridTerrain {
     /// Triangles drawn by `pass` in its last preparation (skirts included).
     pub fn triangles(&self, pass: GridPass) -> u64 {
         let groups = &self.instances[pass as usize].groups;
-        self.ranges.iter().zip(groups).map(|(range, &count)| u64::from(count) * u64::from(range.len() as u32 / 3)).sum()
+        self.ranges
+            .iter()
+            .zip(groups)
+            .map(|(range, &count)| u64::from(count) * u64::from(range.len() as u32 / 3))
+            .sum()
     }
 }
 
@@ -260,7 +277,8 @@ impl Instances {
 /// each; each as (column, row, 1 for a skirt's bottom, 0).
 fn patch_corners() -> Vec<[u8; 4]> {
     let side = PATCH_CELLS + 1;
-    let mut corners: Vec<[u8; 4]> = (0..side * side).map(|v| [(v % side) as u8, (v / side) as u8, 0, 0]).collect();
+    let mut corners: Vec<[u8; 4]> =
+        (0..side * side).map(|v| [(v % side) as u8, (v / side) as u8, 0, 0]).collect();
     for edge in 0..4 {
         for t in 0..side as u8 {
             let last = PATCH_CELLS as u8;
@@ -371,14 +389,23 @@ fn write_band(
             aspect: wgpu::TextureAspect::All,
         },
         data,
-        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(width * bytes_per_texel), rows_per_image: Some(count) },
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(width * bytes_per_texel),
+            rows_per_image: Some(count),
+        },
         wgpu::Extent3d { width, height: count, depth_or_array_layers: 1 },
     );
 }
 
 /// Uploads `image` for the grid's land (a mipmapped RGBA texture) and returns its view.
-pub fn upload_view(context: &PassContext<'_>, what: &str, image: &image::RgbaImage) -> Result<wgpu::TextureView, RenderError> {
-    Ok(upload(context.device, context.queue, what, &[image])?.create_view(&wgpu::TextureViewDescriptor::default()))
+pub fn upload_view(
+    context: &PassContext<'_>,
+    what: &str,
+    image: &image::RgbaImage,
+) -> Result<wgpu::TextureView, RenderError> {
+    Ok(upload(context.device, context.queue, what, &[image])?
+        .create_view(&wgpu::TextureViewDescriptor::default()))
 }
 
 #[cfg(test)]

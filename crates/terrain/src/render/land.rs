@@ -46,7 +46,10 @@ fn land_pipelines(
     let layouts = [layout];
     pipelines(
         context,
-        &PipelineSpec { polygon_mode, ..PipelineSpec::new("land", shader_source!("land.wgsl"), &layouts, &buffers) },
+        &PipelineSpec {
+            polygon_mode,
+            ..PipelineSpec::new("land", shader_source!("land.wgsl"), &layouts, &buffers)
+        },
     )
 }
 
@@ -216,7 +219,10 @@ impl LandPass {
     /// Draws the triangles' edges (`on`) or their faces. The edges need the GPU's
     /// `POLYGON_MODE_LINE` feature: without it this does nothing.
     pub fn set_wireframe(&mut self, context: &PassContext<'_>, on: bool) {
-        if on && self.wireframe.is_none() && context.device.features().contains(wgpu::Features::POLYGON_MODE_LINE) {
+        if on
+            && self.wireframe.is_none()
+            && context.device.features().contains(wgpu::Features::POLYGON_MODE_LINE)
+        {
             self.wireframe = Some(land_pipelines(context, &self.layout, wgpu::PolygonMode::Line));
         }
         self.show_wireframe = on;

@@ -13,6 +13,11 @@ use super::pipeline::{Binding, PassContext, PipelineSpec, bind_group, pipeline, 
 /// Format of the light map: the sun's light (r) and the sky's (g).
 pub const LIGHT_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
 
+/// Largest side of the light map, in texels: maps up to 4097 samples a side get a texel per
+/// sample; larger ones a texel per 2 x 2 (or more) samples, whose light is computed from the
+/// full-resolution heights across them (8193 x 8193 samples: 45 MB instead of 179 MB).
+pub const LIGHT_MAP_MAX_SIDE: u32 = 4097;
+
 /// The WGSL struct `Bake`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -26,6 +31,8 @@ struct BakeUniforms {
 #[derive(Debug)]
 pub struct LightMap {
     view: wgpu::TextureView,
+    /// Heightmap samples a texel of level 0 spans.
+    span: u32,
     levels: Vec<Level>,
     pipeline: wgpu::RenderPipeline,
     /// The sun and shadow switch the map was drawn for.
@@ -44,9 +51,19 @@ struct Level {
 
 impl LightMap {
     /// A light map for `grid`, drawn with the lighting of `lighting_layout` (group 2).
-    pub fn new(context: &PassContext<'_>, grid: &GridTerrain, lighting_layout: &wgpu::BindGroupLayout) -> Self {
+    pub fn new(
+        context: &PassContext<'_>,
+        grid: &GridTerrain,
+        lighting_layout: &wgpu::BindGroupLayout,
+    ) -> Self {
         let device = context.device;
-        let (columns, rows) = grid.samples();
+        let (samples_x, samples_z) = grid.samples();
+        // Samples a texel of level 0 spans.
+        let mut span = 1u32;
+        while samples_x.max(samples_z).div_ceil(span) > LIGHT_MAP_MAX_SIDE {
+            span *= 2;
+        }
+        let (columns, rows) = (samples_x.div_ceil(span), samples_z.div_ceil(span));
         let mip_level_count = columns.max(rows).ilog2() + 1;
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("light map"),
@@ -66,7 +83,11 @@ impl LightMap {
                 bytes += u64::from(width) * u64::from(height) * 2;
                 let uniforms = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("light map level"),
-                    contents: bytemuck::bytes_of(&BakeUniforms { span: 1 << level, shadows: 0, padding: [0; 2] }),
+                    contents: bytemuck::bytes_of(&BakeUniforms {
+                        span: span << level,
+                        shadows: 0,
+                        padding: [0; 2],
+                    }),
                     usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 });
                 let (level_layout, group) = bind_group(
@@ -103,6 +124,7 @@ impl LightMap {
         };
         Self {
             view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
+            span,
             levels,
             pipeline: pipeline(&bake_context, &spec, false),
             drawn_for: None,
@@ -128,7 +150,8 @@ impl LightMap {
     /// Notes that the map is being drawn for `sun` with `shadows` and uploads the switch.
     pub fn prepare(&mut self, queue: &wgpu::Queue, sun: Vec3, shadows: bool) {
         for (level, entry) in self.levels.iter().enumerate() {
-            let uniforms = BakeUniforms { span: 1 << level, shadows: u32::from(shadows), padding: [0; 2] };
+            let uniforms =
+                BakeUniforms { span: self.span << level, shadows: u32::from(shadows), padding: [0; 2] };
             queue.write_buffer(&entry.uniforms, 0, bytemuck::bytes_of(&uniforms));
         }
         self.drawn_for = Some((sun, shadows));
@@ -136,7 +159,12 @@ impl LightMap {
 
     /// Draws every level (after the shadow map), with any `frame` uniforms (unused) and the
     /// lighting's `lighting_group`.
-    pub fn draw(&self, encoder: &mut wgpu::CommandEncoder, frame: &wgpu::BindGroup, lighting_group: &wgpu::BindGroup) {
+    pub fn draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &wgpu::BindGroup,
+        lighting_group: &wgpu::BindGroup,
+    ) {
         for level in &self.levels {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("light map"),
@@ -144,7 +172,10 @@ impl LightMap {
                     view: &level.view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 depth_stencil_attachment: None,
                 timestamp_writes: None,

@@ -60,9 +60,10 @@ impl SceneUniforms {
             f64::from(config.wave_velocity.x) * f64::from(config.sky_box_size.x / config.water_repeat.x),
             f64::from(config.wave_velocity.y) * f64::from(config.sky_box_size.z / config.water_repeat.y),
         );
-        let travel = course_speed * f64::from(water.wave_speed) * inputs.time_seconds
-            / f64::from(water.wave_scale);
-        let crossing = DVec2::new(travel.x * 0.6 - travel.y * 0.8, travel.x * 0.8 + travel.y * 0.6) * 1.37 * 0.8;
+        let travel =
+            course_speed * f64::from(water.wave_speed) * inputs.time_seconds / f64::from(water.wave_scale);
+        let crossing =
+            DVec2::new(travel.x * 0.6 - travel.y * 0.8, travel.x * 0.8 + travel.y * 0.6) * 1.37 * 0.8;
         let wrap = |v: f64| v.rem_euclid(1.0) as f32;
         let box_size = config.sky_box_size;
         Self {
@@ -136,7 +137,8 @@ pub fn sun_matrix(sun: Vec3, min: Vec3, max: Vec3) -> Mat4 {
         high = high.max(p);
     }
     // The camera looks down -z: depths are -z.
-    glam::camera::rh::proj::directx::orthographic(low.x, high.x, low.y, high.y, -high.z - 0.01, -low.z + 0.01) * view
+    glam::camera::rh::proj::directx::orthographic(low.x, high.x, low.y, high.y, -high.z - 0.01, -low.z + 0.01)
+        * view
 }
 
 /// The shadow map and the lighting bind group (group 2).
@@ -165,7 +167,11 @@ impl Lighting {
         });
         let shadow = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("shadow map"),
-            size: wgpu::Extent3d { width: SHADOW_MAP_SIZE, height: SHADOW_MAP_SIZE, depth_or_array_layers: 1 },
+            size: wgpu::Extent3d {
+                width: SHADOW_MAP_SIZE,
+                height: SHADOW_MAP_SIZE,
+                depth_or_array_layers: 1,
+            },
             mip_level_count: 1,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
@@ -241,7 +247,11 @@ mod tests {
         };
         // 0.2 units a second over tiles of 2 units: 0.1 tile a second, drifting toward -x, -z.
         let later = SceneUniforms::new(&settings, &config, &inputs(1.0));
-        assert!((later.waves[0] - 0.9).abs() < 1e-5 && (later.waves[1] - 0.9).abs() < 1e-5, "{:?}", later.waves);
+        assert!(
+            (later.waves[0] - 0.9).abs() < 1e-5 && (later.waves[1] - 0.9).abs() < 1e-5,
+            "{:?}",
+            later.waves
+        );
         // Wrapped, so a long-running window keeps its precision (the course's speed is an f32:
         // over a week it drifts from 0.1 tile a second by about a thousandth of a tile).
         let week = SceneUniforms::new(&settings, &config, &inputs(7.0 * 86400.0 + 1.0));

@@ -49,8 +49,8 @@ fn daylight() -> f32 {
     return mix(0.28, 1.0, smoothstep(-0.1, 0.35, scene.sun_direction.y));
 }
 
-// The sky box's colour `stored` seen in `direction` (unit, from the box's centre), graded for
-// the sun: darker as it sets, warm toward it near the horizon, with its glow and disc.
+// The sky box's colour `stored` seen in `direction` (unit, from the eye), graded for the sun:
+// darker as it sets, warm toward it near the horizon, with its glow and disc.
 fn graded_sky(stored: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
     let sun = scene.sun_direction.xyz;
     let facing = max(dot(direction, sun), 0.0);
@@ -108,7 +108,7 @@ fn sky_along(origin: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
     let half_texel = vec2<f32>(0.5) / size;
     let clamped = clamp(uv, half_texel, vec2<f32>(1.0) - half_texel);
     let stored = textureSampleLevel(sky_faces, sky_sampler, clamped, layer, 0.0).rgb;
-    return graded_sky(stored, normalize(vec3<f32>(exit.x, max(exit.y, 0.0), exit.z) + vec3<f32>(0.0, 1e-4, 0.0)));
+    return graded_sky(stored, direction);
 }
 
 // The graded sky at the horizon in the direction from `eye` to `point` (seen horizontally, at

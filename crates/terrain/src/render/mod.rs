@@ -102,8 +102,12 @@ pub struct Renderer {
 /// GPU memory a renderer holds, in bytes, by what it is for.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct GpuMemory {
-    /// The heightmap's texture and its normals (the grid), or the course's static mesh.
-    pub terrain: u64,
+    /// The heightmap's texture (the grid: 2 bytes a sample) and its patch mesh.
+    pub heights: u64,
+    /// The course look's static mesh (maps up to [`MESH_MAX_SIDE`]).
+    pub mesh: u64,
+    /// The modern look's light map (with its mip levels).
+    pub light_map: u64,
     /// Colour, detail and sky textures, wave maps, the shadow map and the reflection.
     pub textures: u64,
     /// The frame's depth buffer.
@@ -113,7 +117,13 @@ pub struct GpuMemory {
 impl GpuMemory {
     /// All of it.
     pub fn total(&self) -> u64 {
-        self.terrain + self.textures + self.depth
+        self.heights + self.mesh + self.light_map + self.textures + self.depth
+    }
+
+    /// What the terrain's geometry and light cost per height sample (`samples` of them), in
+    /// bytes: the height texture, the mesh and the light map.
+    pub fn bytes_per_sample(&self, samples: u64) -> f64 {
+        (self.heights + self.mesh + self.light_map) as f64 / samples.max(1) as f64
     }
 }
 
@@ -141,7 +151,10 @@ impl Renderer {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some(["frame", "frame (mirrored)", "frame (sun)"][i]),
                 layout: &frame_layout,
-                entries: &[wgpu::BindGroupEntry { binding: 0, resource: frame_buffers[i].as_entire_binding() }],
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame_buffers[i].as_entire_binding(),
+                }],
             })
         });
         let multi_draw =
@@ -224,11 +237,12 @@ impl Renderer {
 
     /// GPU memory held for the looks used so far.
     pub fn gpu_memory(&self) -> GpuMemory {
-        let grid = self.grid.as_ref().map_or(0, GridTerrain::gpu_bytes);
         let (mesh, course) = self.course.as_ref().map_or((0, 0), CourseLook::gpu_bytes);
-        let modern = self.modern.as_ref().map_or(0, ModernLook::gpu_bytes);
+        let (light_map, modern) = self.modern.as_ref().map_or((0, 0), ModernLook::gpu_bytes);
         GpuMemory {
-            terrain: grid + mesh,
+            heights: self.grid.as_ref().map_or(0, GridTerrain::gpu_bytes),
+            mesh,
+            light_map,
             textures: course + modern,
             depth: self.depth.as_ref().map_or(0, |d| u64::from(d.size().0) * u64::from(d.size().1) * 4),
         }

@@ -54,11 +54,18 @@ impl ModernLook {
         let faces = SkyFaces::new(context, world.clear_sky())?;
         let lighting = Lighting::new(device, world.clear_sky(), &faces.view);
         let reflection_context = PassContext { target_format: REFLECTION_FORMAT, ..*context };
-        let sky = SkyPass::modern(context, &reflection_context, &faces, config, (&lighting.layout, &lighting.group));
+        let sky = SkyPass::modern(
+            context,
+            &reflection_context,
+            &faces,
+            config,
+            (&lighting.layout, &lighting.group),
+        );
         let albedo = upload_view(context, "albedo map", world.albedo_map())?;
         let detail = upload_view(context, "detail map", &world.detail_map)?;
         let light_map = LightMap::new(context, grid, &lighting.layout);
-        let (land_layout, land_group) = grid.land_group(device, "land (modern)", &albedo, &detail, light_map.view());
+        let (land_layout, land_group) =
+            grid.land_group(device, "land (modern)", &albedo, &detail, light_map.view());
         let land = land_pipelines(context, &land_layout, &lighting.layout, wgpu::PolygonMode::Fill);
         let (heights_layout, heights_group) = grid.heights_group(device);
         let shadow = ShadowPass::new(context, &heights_layout);
@@ -75,8 +82,7 @@ impl ModernLook {
             Vec3::new(half, config.height_of_level(255.0), half),
         );
         let images = world.albedo_map().as_raw().len() + world.detail_map.as_raw().len();
-        let gpu_bytes =
-            faces.bytes + images as u64 * 4 / 3 + lighting.gpu_bytes() + sea.gpu_bytes() + light_map.gpu_bytes();
+        let gpu_bytes = faces.bytes + images as u64 * 4 / 3 + lighting.gpu_bytes() + sea.gpu_bytes();
         Ok(Self {
             sky,
             lighting,
@@ -96,17 +102,23 @@ impl ModernLook {
         })
     }
 
-    /// GPU memory of the look's own resources (not the shared grid), in bytes.
-    pub fn gpu_bytes(&self) -> u64 {
-        self.gpu_bytes + self.reflection.as_ref().map_or(0, ReflectionTarget::gpu_bytes)
+    /// GPU memory of the look's own resources (not the shared grid), in bytes: the light map,
+    /// then the rest.
+    pub fn gpu_bytes(&self) -> (u64, u64) {
+        let rest = self.gpu_bytes + self.reflection.as_ref().map_or(0, ReflectionTarget::gpu_bytes);
+        (self.light_map.gpu_bytes(), rest)
     }
 
     /// Draws the land's edges (`on`) or its faces, where the GPU can.
     pub fn set_wireframe(&mut self, context: &PassContext<'_>, on: bool) {
         let able = context.device.features().contains(wgpu::Features::POLYGON_MODE_LINE);
         if on && able && self.wireframe.is_none() {
-            self.wireframe =
-                Some(land_pipelines(context, &self.land_layout, &self.lighting.layout, wgpu::PolygonMode::Line));
+            self.wireframe = Some(land_pipelines(
+                context,
+                &self.land_layout,
+                &self.lighting.layout,
+                wgpu::PolygonMode::Line,
+            ));
         }
         self.show_wireframe = on && able;
     }
@@ -141,7 +153,12 @@ impl Renderer {
         let (Some(modern), Some(grid)) = (&mut self.modern, &mut self.grid) else { return false };
         let sun = settings.sun.direction();
         let shadow_matrix = sun_matrix(sun, modern.bounds.0, modern.bounds.1);
-        let inputs = SceneInputs { time_seconds, frame_size: size, shadow_matrix, sky_light: modern.lighting.sky_light };
+        let inputs = SceneInputs {
+            time_seconds,
+            frame_size: size,
+            shadow_matrix,
+            sky_light: modern.lighting.sky_light,
+        };
         let uniforms = SceneUniforms::new(settings, &self.config, &inputs);
         gpu.queue.write_buffer(&modern.lighting.buffer, 0, bytemuck::bytes_of(&uniforms));
         // The reflection, at the settings' fraction of the frame.
@@ -163,7 +180,8 @@ impl Renderer {
             let uniforms =
                 super::uniforms::FrameUniforms::new(shadow_matrix, false, glam::Vec2::ZERO, sun * 1000.0);
             gpu.queue.write_buffer(&self.frame_buffers[2], 0, bytemuck::bytes_of(&uniforms));
-            let texels_per_unit = super::lighting::SHADOW_MAP_SIZE as f32 / (modern.bounds.1 - modern.bounds.0).length();
+            let texels_per_unit =
+                super::lighting::SHADOW_MAP_SIZE as f32 / (modern.bounds.1 - modern.bounds.0).length();
             let view = crate::world::quadtree::TreeView {
                 eye: sun * 1000.0,
                 frustum: crate::camera::Frustum::from_view_projection(shadow_matrix),
@@ -179,7 +197,12 @@ impl Renderer {
 
     /// Draws the modern look: the shadow map and the light map when `relight` asks, the
     /// reflection, then the frame (land nearest first, sky, water).
-    pub(super) fn draw_modern(&mut self, encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView, relight: bool) {
+    pub(super) fn draw_modern(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &wgpu::TextureView,
+        relight: bool,
+    ) {
         let (Some(modern), Some(grid), Some(depth)) = (&self.modern, &self.grid, &self.depth) else { return };
         let [direct, mirrored, sun] = &self.frame_groups;
         if relight {

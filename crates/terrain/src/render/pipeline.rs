@@ -202,7 +202,10 @@ pub fn bind_group_for(
     let entries: Vec<wgpu::BindGroupEntry<'_>> = bindings
         .iter()
         .enumerate()
-        .map(|(binding, resource)| wgpu::BindGroupEntry { binding: binding as u32, resource: resource.resource() })
+        .map(|(binding, resource)| wgpu::BindGroupEntry {
+            binding: binding as u32,
+            resource: resource.resource(),
+        })
         .collect();
     device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
 }
@@ -215,7 +218,9 @@ impl Binding<'_> {
             | Binding::TextureArray(view)
             | Binding::UintTexture(view)
             | Binding::DepthTexture(view) => wgpu::BindingResource::TextureView(view),
-            Binding::Sampler(sampler) | Binding::ComparisonSampler(sampler) => wgpu::BindingResource::Sampler(sampler),
+            Binding::Sampler(sampler) | Binding::ComparisonSampler(sampler) => {
+                wgpu::BindingResource::Sampler(sampler)
+            }
         }
     }
 }

@@ -3,10 +3,12 @@
 
 use wgpu::util::DeviceExt;
 
-use super::grid::GridTerrain;
-use super::pipeline::{Binding, PassContext, PipelineSpec, bind_group, bind_group_for, pipeline, shader_source};
-use super::texture::{sampler, upload};
 use super::RenderError;
+use super::grid::GridTerrain;
+use super::pipeline::{
+    Binding, PassContext, PipelineSpec, bind_group, bind_group_for, pipeline, shader_source,
+};
+use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
 use crate::world::procedural::{WAVE_MAP_SIZE, wave_map};
 
@@ -52,8 +54,18 @@ impl SeaPass {
         let blank = image::RgbaImage::from_pixel(1, 1, image::Rgba([0, 0, 0, 255]));
         let no_reflection = upload(device, context.queue, "no reflection", &[&blank])?
             .create_view(&wgpu::TextureViewDescriptor::default());
-        let (layout, bind_group) =
-            bind_group(device, "sea", &bindings(grid, &wave_maps, (colour, light), &no_reflection, &sampler(device, true), &sampler(device, false)));
+        let (layout, bind_group) = bind_group(
+            device,
+            "sea",
+            &bindings(
+                grid,
+                &wave_maps,
+                (colour, light),
+                &no_reflection,
+                &sampler(device, true),
+                &sampler(device, false),
+            ),
+        );
         let attributes = wgpu::vertex_attr_array![0 => Float32x3];
         let buffers = [wgpu::VertexBufferLayout {
             array_stride: size_of::<[f32; 3]>() as u64,
@@ -61,8 +73,12 @@ impl SeaPass {
             attributes: &attributes,
         }];
         let layouts = [&layout, lighting.0];
-        let spec =
-            PipelineSpec::new("sea", shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl"), &layouts, &buffers);
+        let spec = PipelineSpec::new(
+            "sea",
+            shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl"),
+            &layouts,
+            &buffers,
+        );
         let (positions, indices) = sea_mesh(config);
         Ok(Self {
             pipeline: pipeline(context, &spec, false),
@@ -145,27 +161,6 @@ fn sea_mesh(config: &SceneConfig) -> (Vec<[f32; 3]>, Vec<u16>) {
     (positions, indices)
 }
 
-#[cfg(test)]
-mod tests {
-    use glam::Vec3;
-
-    use super::*;
-
-    #[test]
-    fn the_sea_covers_the_floor_facing_up() {
-        let config = SceneConfig::default();
-        let (positions, indices) = sea_mesh(&config);
-        let p = |i: u16| Vec3::from_array(positions[usize::from(i)]);
-        let mut area = 0.0;
-        for t in indices.chunks(3) {
-            let normal = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
-            assert!(normal.y > 0.0);
-            area += normal.y / 2.0;
-        }
-        assert!((area - 200.0 * 280.0).abs() < 56.0, "{area}");
-    }
-}
-
 /// The water's group 1: the grid's uniforms and heights, the sea floor's colour map, the wave
 /// maps, the reflection, the samplers and the light map (as `sea.wgsl` binds them).
 fn bindings<'a>(
@@ -187,4 +182,25 @@ fn bindings<'a>(
         Binding::Sampler(clamp),
         Binding::Texture(light),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    #[test]
+    fn the_sea_covers_the_floor_facing_up() {
+        let config = SceneConfig::default();
+        let (positions, indices) = sea_mesh(&config);
+        let p = |i: u16| Vec3::from_array(positions[usize::from(i)]);
+        let mut area = 0.0;
+        for t in indices.chunks(3) {
+            let normal = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
+            assert!(normal.y > 0.0);
+            area += normal.y / 2.0;
+        }
+        assert!((area - 200.0 * 280.0).abs() < 56.0, "{area}");
+    }
 }

@@ -111,9 +111,9 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
 
     // Foam where the water is shallow, broken up by the wave maps' foam channel.
     if (scene.water_flags.x > 0.5 && depth > -0.02) {
-        let shore = 1.0 - smoothstep(0.0, 0.09, depth);
-        let pattern = smoothstep(0.35, 0.75, (a.b + b.b) * 0.5 + 0.45 * shore);
-        let foam = clamp(shore * pattern * 1.4, 0.0, 1.0);
+        let shore = 1.0 - smoothstep(0.0, 0.06, depth);
+        let pattern = smoothstep(0.5, 0.85, (a.b + b.b) * 0.5 + 0.3 * shore);
+        let foam = clamp(shore * pattern * 1.5, 0.0, 1.0);
         colour = mix(colour, vec3<f32>(0.92, 0.95, 0.96) * shade, foam * 0.85);
     }
 

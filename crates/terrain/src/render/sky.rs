@@ -110,7 +110,8 @@ impl SkyPass {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &attributes,
         }];
-        let layouts: Vec<&wgpu::BindGroupLayout> = std::iter::once(&layout).chain(lighting.map(|l| l.0)).collect();
+        let layouts: Vec<&wgpu::BindGroupLayout> =
+            std::iter::once(&layout).chain(lighting.map(|l| l.0)).collect();
         let spec = PipelineSpec {
             vertex_entry,
             fragment_entry: Some(fragment_entry),

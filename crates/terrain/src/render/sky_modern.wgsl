@@ -23,5 +23,8 @@ fn vs_modern(@location(0) position: vec3<f32>, @location(1) uv: vec2<f32>, @loca
 @fragment
 fn fs_modern(in: ModernSkyVertex) -> @location(0) vec4<f32> {
     let stored = textureSample(faces, edge_clamp, in.uv, in.layer).rgb;
-    return vec4<f32>(graded_sky(stored, normalize(in.point)), 1.0);
+    // The sun is far away: its glow is where the view points, wherever the eye is (the mirror
+    // image is seen from the eye's mirror image).
+    let eye = vec3<f32>(frame.eye.x, frame.eye.y * frame.y_sign, frame.eye.z);
+    return vec4<f32>(graded_sky(stored, normalize(in.point - eye)), 1.0);
 }

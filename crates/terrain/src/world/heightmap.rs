@@ -287,7 +287,8 @@ mod tests {
 
     #[test]
     fn images_take_two_bytes_a_sample_and_keep_their_values() {
-        let image: ImageBuffer<Luma<u16>, Vec<u16>> = ImageBuffer::from_fn(3, 2, |x, y| Luma([(x * 20_000 + y) as u16]));
+        let image: ImageBuffer<Luma<u16>, Vec<u16>> =
+            ImageBuffer::from_fn(3, 2, |x, y| Luma([(x * 20_000 + y) as u16]));
         let map = Heightmap::from_image_owned(DynamicImage::ImageLuma16(image.clone())).expect("valid");
         assert_eq!(map.bytes_per_sample(), 2);
         assert_eq!(map.to_image(), image);

@@ -352,11 +352,8 @@ fn skirt_strip(edge: &[[f32; 3]], side: usize, depth: f32) -> Block {
             block.positions.len() as u32 - 1
         };
         let (p_low, q_low) = (below(p), below(q));
-        let triangles = if side == 0 {
-            [[p, q, q_low], [p, q_low, p_low]]
-        } else {
-            [[q, p, p_low], [q, p_low, q_low]]
-        };
+        let triangles =
+            if side == 0 { [[p, q, q_low], [p, q_low, p_low]] } else { [[q, p, p_low], [q, p_low, q_low]] };
         for triangle in triangles {
             block.add(triangle);
         }
@@ -533,12 +530,14 @@ mod tests {
         assert_eq!(mesh.chunks[0].levels.len(), 6, "strides 1 to 32");
         assert_eq!(mesh.chunks[5].levels.len(), 4, "a 5 x 7-cell chunk: strides 1 to 8");
         // Blocks follow one another without gaps or overlaps, and index only their own vertices.
-        let ranges: Vec<&DrawRange> = mesh.chunks.iter().flat_map(|c| &c.levels).flat_map(ChunkLevel::ranges).collect();
+        let ranges: Vec<&DrawRange> =
+            mesh.chunks.iter().flat_map(|c| &c.levels).flat_map(ChunkLevel::ranges).collect();
         let (mut next_vertex, mut next_index) = (0, 0);
         for (i, range) in ranges.iter().enumerate() {
             assert_eq!((range.base_vertex, range.first_index), (next_vertex, next_index));
             let end = ranges.get(i + 1).map_or(mesh.positions.len() as u32, |r| r.base_vertex);
-            let indices = &mesh.indices[range.first_index as usize..(range.first_index + range.index_count) as usize];
+            let indices =
+                &mesh.indices[range.first_index as usize..(range.first_index + range.index_count) as usize];
             assert!(indices.iter().all(|&v| range.base_vertex + u32::from(v) < end));
             next_vertex = end;
             next_index += range.index_count;

@@ -172,7 +172,12 @@ impl World {
         let sky = |sky: &SkyBox| sky.faces().iter().map(|face| image(face)).sum::<usize>();
         let heights = self.heightmap.levels().len() * self.heightmap.bytes_per_sample();
         let unlit = self.unlit.as_ref().map_or(0, |u| image(&u.albedo_map) + sky(&u.sky));
-        heights + image(&self.colour_map) + image(&self.detail_map) + sky(&self.sky) + image(&self.water) + unlit
+        heights
+            + image(&self.colour_map)
+            + image(&self.detail_map)
+            + sky(&self.sky)
+            + image(&self.water)
+            + unlit
     }
 }
 

@@ -25,7 +25,7 @@ pub const PATCH_CELLS: u32 = 16;
 /// The smallest size, in pixels, a cell may have on screen before refining stops even if the
 /// error asks for more: finer detail is left to the per-pixel normals, and the GPU is spared
 /// triangles smaller than the pixels they cover.
-pub const MIN_CELL_PIXELS: f32 = 3.0;
+pub const MIN_CELL_PIXELS: f32 = 4.0;
 
 /// The most sample visits spent on exact node errors (see [`TerrainTree::new`]).
 const EXACT_ERROR_BUDGET: usize = 48_000_000;
@@ -172,10 +172,7 @@ impl TerrainTree {
         let last = [(first[0] + span).min(self.columns - 1), (first[1] + span).min(self.rows - 1)];
         let x = |column: u32| self.origin[0] + column as f32 * self.cell;
         let z = |row: u32| self.origin[1] + row as f32 * self.cell;
-        (
-            Vec3::new(x(first[0]), l.low[index], z(first[1])),
-            Vec3::new(x(last[0]), l.high[index], z(last[1])),
-        )
+        (Vec3::new(x(first[0]), l.low[index], z(first[1])), Vec3::new(x(last[0]), l.high[index], z(last[1])))
     }
 
     /// The patches to draw for `view`: the coarsest nodes whose error stays within
@@ -220,7 +217,8 @@ impl TerrainTree {
         if !view.frustum.intersects_box(min - Vec3::Y * reach, max + Vec3::Y * reach) {
             return;
         }
-        let distance = if view.orthographic { 1.0 } else { (view.eye.clamp(min, max) - view.eye).length().max(1e-3) };
+        let distance =
+            if view.orthographic { 1.0 } else { (view.eye.clamp(min, max) - view.eye).length().max(1e-3) };
         let pixels = view.pixels_per_unit / distance;
         let error = self.error(level, i, j);
         let stride = 1u32 << level;
@@ -276,12 +274,8 @@ impl TerrainTree {
             let stride = c.patch.stride;
             let mut deepest = 0.0f32;
             // The cells just outside each edge, in the mask's order.
-            let outside: [&dyn Fn(isize) -> (isize, isize); 4] = [
-                &|k| (i0 + k, j0 - 1),
-                &|k| (i0 + k, j0 + n),
-                &|k| (i0 - 1, j0 + k),
-                &|k| (i0 + n, j0 + k),
-            ];
+            let outside: [&dyn Fn(isize) -> (isize, isize); 4] =
+                [&|k| (i0 + k, j0 - 1), &|k| (i0 + k, j0 + n), &|k| (i0 - 1, j0 + k), &|k| (i0 + n, j0 + k)];
             for (edge, cell) in outside.iter().enumerate() {
                 for k in 0..n {
                     let (i, j) = cell(k);
@@ -491,14 +485,17 @@ mod tests {
     fn errors_bound_the_true_deviation() {
         let config = SceneConfig::default();
         // Hills and a sea floor: the levels cross the water (level 100).
-        let m = map(161, 129, |r, c| 100.0 + 60.0 * ((r as f32 * 0.07).sin() * (c as f32 * 0.05).cos()) + (r * c % 7) as f32);
+        let m = map(161, 129, |r, c| {
+            100.0 + 60.0 * ((r as f32 * 0.07).sin() * (c as f32 * 0.05).cos()) + (r * c % 7) as f32
+        });
         let tree = TerrainTree::new(&m, &config);
         for level in 0..tree.level_count() {
             let l = &tree.levels[level];
             let span = PATCH_CELLS << level;
             for j in 0..l.nodes_z {
                 for i in 0..l.nodes_x {
-                    let patch = Patch { column: i * span, row: j * span, stride: 1 << level, skirt_depth: 0.0 };
+                    let patch =
+                        Patch { column: i * span, row: j * span, stride: 1 << level, skirt_depth: 0.0 };
                     let mut worst = 0.0f32;
                     for r in j * span..=((j + 1) * span).min(m.rows() - 1) {
                         for c in i * span..=((i + 1) * span).min(m.columns() - 1) {
@@ -581,7 +578,11 @@ mod tests {
         assert!(nearest.stride < farthest.stride, "{patches:?}");
         let centre = |p: &Patch| {
             let span = (PATCH_CELLS * p.stride) as f32 * tree.cell;
-            Vec3::new(tree.origin[0] + p.column as f32 * tree.cell + span / 2.0, 0.0, tree.origin[1] + p.row as f32 * tree.cell + span / 2.0)
+            Vec3::new(
+                tree.origin[0] + p.column as f32 * tree.cell + span / 2.0,
+                0.0,
+                tree.origin[1] + p.row as f32 * tree.cell + span / 2.0,
+            )
         };
         assert!(patches.iter().all(|p| centre(p).z < 8.0 + 2.0), "a patch behind the camera");
         // A larger error allows fewer patches.
@@ -598,17 +599,26 @@ mod tests {
         let pose = CameraPose::new(Vec3::new(-9.0, 1.0, 9.0), 45.0, -10.0);
         let mut patches = Vec::new();
         tree.select(&view(pose, 2.0), &mut patches);
-        let error_of = |p: &Patch| tree.error(p.stride.trailing_zeros() as usize, p.column / (PATCH_CELLS * p.stride), p.row / (PATCH_CELLS * p.stride));
+        let error_of = |p: &Patch| {
+            tree.error(
+                p.stride.trailing_zeros() as usize,
+                p.column / (PATCH_CELLS * p.stride),
+                p.row / (PATCH_CELLS * p.stride),
+            )
+        };
         let largest = patches.iter().map(error_of).fold(0.0f32, f32::max);
         assert!(largest > 0.0);
         for p in &patches {
             assert!(p.skirt_depth >= error_of(p));
         }
         // Some patch's skirt is deeper than its own error: a coarser neighbour's error.
-        assert!(patches.iter().any(|p| p.skirt_depth > error_of(p) + 0.5 * tree.cell * p.stride as f32 + 1e-6));
+        assert!(
+            patches.iter().any(|p| p.skirt_depth > error_of(p) + 0.5 * tree.cell * p.stride as f32 + 1e-6)
+        );
         // Patches whose neighbours all share their stride have no skirts: the edges meet exactly.
         let flat = TerrainTree::new(&map(257, 257, |_, _| 150.0), &config);
-        let groups = flat.select(&view(CameraPose::new(Vec3::new(0.0, 90.0, 0.0), 0.0, -89.0), 2.0), &mut patches);
+        let groups =
+            flat.select(&view(CameraPose::new(Vec3::new(0.0, 90.0, 0.0), 0.0, -89.0), 2.0), &mut patches);
         assert_eq!(groups[0] as usize, patches.len(), "{groups:?}");
     }
 

@@ -8,11 +8,11 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use image::{Rgba, RgbaImage};
-use terrain::{SceneConfig, Settings};
 use terrain::camera::CameraPose;
 use terrain::headless::render_image;
 use terrain::render::{Backend, FrameView, Gpu};
 use terrain::world::{Heightmap, SkyBox, World};
+use terrain::{SceneConfig, Settings};
 
 /// Whether the tests run under CI (`CI` set to anything but `false` or empty), where a missing
 /// GPU or missing course assets are failures rather than skips.
@@ -84,7 +84,13 @@ pub fn render(gpu: &Gpu, world: &World, size: (u32, u32), view: &FrameView) -> R
 }
 
 /// Renders `world` with the course's numbers and `settings`.
-pub fn render_with(gpu: &Gpu, world: &World, settings: &Settings, size: (u32, u32), view: &FrameView) -> RgbaImage {
+pub fn render_with(
+    gpu: &Gpu,
+    world: &World,
+    settings: &Settings,
+    size: (u32, u32),
+    view: &FrameView,
+) -> RgbaImage {
     render_image(gpu, world, &SceneConfig::default(), settings, size, view).expect("renders")
 }
 

@@ -58,43 +58,51 @@ pub fn colour_maps(
     let sun = DVec3::from(SUN_DIRECTION).normalize();
     let (columns, rows) = (heightmap.columns(), heightmap.rows());
     let cell = f64::from(Heightfield::cell_size_of(heightmap, config));
-    let texels = grid_from_fn_with_progress(width, height, |x, y| {
-        // This texel's centre in sample coordinates (sample centres at whole numbers).
-        let column = (x as f64 + 0.5) / width as f64 * columns as f64 - 0.5;
-        let row = (y as f64 + 0.5) / height as f64 * rows as f64 - 0.5;
-        let h = sample(&field, column, row);
-        let slope_x = (sample(&field, column + 1.0, row) - sample(&field, column - 1.0, row)) / (2.0 * cell);
-        let slope_z = (sample(&field, column, row + 1.0) - sample(&field, column, row - 1.0)) / (2.0 * cell);
-        let normal = DVec3::new(-slope_x, 1.0, -slope_z).normalize();
-        let steepness = 1.0 - normal.y; // 0 flat, ~0.3 at 45 degrees
-        // Noise in map coordinates (u, v in 0..1), independent of the map's resolution.
-        let (u, v) = (x as f64 / width as f64, y as f64 / height as f64);
-        let patch = patches.get([u * 9.0, v * 9.0]);
-        let fine = grain.get([u * 60.0, v * 60.0]);
-        let band = bands.get([h * 2.5, u * 4.0, v * 4.0]);
+    let texels = grid_from_fn_with_progress(
+        width,
+        height,
+        |x, y| {
+            // This texel's centre in sample coordinates (sample centres at whole numbers).
+            let column = (x as f64 + 0.5) / width as f64 * columns as f64 - 0.5;
+            let row = (y as f64 + 0.5) / height as f64 * rows as f64 - 0.5;
+            let h = sample(&field, column, row);
+            let slope_x =
+                (sample(&field, column + 1.0, row) - sample(&field, column - 1.0, row)) / (2.0 * cell);
+            let slope_z =
+                (sample(&field, column, row + 1.0) - sample(&field, column, row - 1.0)) / (2.0 * cell);
+            let normal = DVec3::new(-slope_x, 1.0, -slope_z).normalize();
+            let steepness = 1.0 - normal.y; // 0 flat, ~0.3 at 45 degrees
+            // Noise in map coordinates (u, v in 0..1), independent of the map's resolution.
+            let (u, v) = (x as f64 / width as f64, y as f64 / height as f64);
+            let patch = patches.get([u * 9.0, v * 9.0]);
+            let fine = grain.get([u * 60.0, v * 60.0]);
+            let band = bands.get([h * 2.5, u * 4.0, v * 4.0]);
 
-        // Lowland: grass of varying shade, with darker woods in patches.
-        let grass = mix(GRASS_LIGHT, GRASS_DARK, smoothstep(-0.5, 0.6, patch + 0.3 * fine));
-        let mut colour = mix(grass, FOREST, smoothstep(0.15, 0.45, patch) * (1.0 - smoothstep(1.0, 1.5, h)));
-        // Rock on steep ground and above the tree line, banded like strata.
-        let rock = mix(ROCK_LIGHT, ROCK_DARK, smoothstep(-0.6, 0.6, band + 0.5 * fine));
-        let rockiness =
-            smoothstep(0.06, 0.16, steepness + 0.03 * fine).max(smoothstep(1.25, 1.6, h + 0.15 * patch));
-        colour = mix(colour, rock, rockiness);
-        // Snow on the peaks, sliding off the steepest faces.
-        let snow = smoothstep(1.75, 1.95, h + 0.12 * patch + 0.05 * fine)
-            * (1.0 - smoothstep(0.20, 0.35, steepness));
-        colour = mix(colour, SNOW, snow);
-        // Beach: sand just above the water, wet sand at the waterline, seabed below.
-        let shore = 0.10 + 0.06 * patch;
-        let sand = mix(WET_SAND, SAND, smoothstep(0.0, 0.05, h));
-        colour = mix(sand, colour, smoothstep(shore, shore + 0.08, h));
-        colour = mix(SEABED, colour, smoothstep(-0.15, 0.0, h));
+            // Lowland: grass of varying shade, with darker woods in patches.
+            let grass = mix(GRASS_LIGHT, GRASS_DARK, smoothstep(-0.5, 0.6, patch + 0.3 * fine));
+            let mut colour =
+                mix(grass, FOREST, smoothstep(0.15, 0.45, patch) * (1.0 - smoothstep(1.0, 1.5, h)));
+            // Rock on steep ground and above the tree line, banded like strata.
+            let rock = mix(ROCK_LIGHT, ROCK_DARK, smoothstep(-0.6, 0.6, band + 0.5 * fine));
+            let rockiness =
+                smoothstep(0.06, 0.16, steepness + 0.03 * fine).max(smoothstep(1.25, 1.6, h + 0.15 * patch));
+            colour = mix(colour, rock, rockiness);
+            // Snow on the peaks, sliding off the steepest faces.
+            let snow = smoothstep(1.75, 1.95, h + 0.12 * patch + 0.05 * fine)
+                * (1.0 - smoothstep(0.20, 0.35, steepness));
+            colour = mix(colour, SNOW, snow);
+            // Beach: sand just above the water, wet sand at the waterline, seabed below.
+            let shore = 0.10 + 0.06 * patch;
+            let sand = mix(WET_SAND, SAND, smoothstep(0.0, 0.05, h));
+            colour = mix(sand, colour, smoothstep(shore, shore + 0.08, h));
+            colour = mix(SEABED, colour, smoothstep(-0.15, 0.0, h));
 
-        // Hill shading from the sun, plus a little grain so flat areas are not uniform.
-        let light = 0.58 + 0.62 * normal.dot(sun).max(0.0) + 0.04 * fine;
-        (to_pixel(colour.map(|c| c * light)), to_pixel(colour.map(|c| c * (0.96 + 0.04 * fine))))
-    }, progress);
+            // Hill shading from the sun, plus a little grain so flat areas are not uniform.
+            let light = 0.58 + 0.62 * normal.dot(sun).max(0.0) + 0.04 * fine;
+            (to_pixel(colour.map(|c| c * light)), to_pixel(colour.map(|c| c * (0.96 + 0.04 * fine))))
+        },
+        progress,
+    );
     let (shaded, albedo): (Vec<[u8; 4]>, Vec<[u8; 4]>) = texels.into_iter().unzip();
     let image = |texels: Vec<[u8; 4]>| {
         RgbaImage::from_raw(width, height, texels.into_iter().flatten().collect())

@@ -75,11 +75,7 @@ impl IslandNoise {
 /// The base and mountain heights on a `size` x `size` grid of pixel centres, and the scale that
 /// brings the highest peaks (all but the top 0.05% of the map) to `PEAK_HEIGHT`: whatever the
 /// seed, every island gets snow-capped summits and none is cut flat.
-fn elevations(
-    noise: &IslandNoise,
-    size: u32,
-    progress: &mut dyn FnMut(f32),
-) -> (Vec<(f64, f64)>, f64) {
+fn elevations(noise: &IslandNoise, size: u32, progress: &mut dyn FnMut(f32)) -> (Vec<(f64, f64)>, f64) {
     let scale = 2.0 / size as f64;
     let elevations = grid_from_fn_with_progress(
         size,
@@ -148,8 +144,7 @@ fn island_with_exact_side(
     }
     // The shape on the coarse grid: a fifth of the work at 4097 samples, a sixteenth at 8193.
     let coarse_share = 0.3;
-    let (elevations, scale) =
-        elevations(&noise, exact_side, &mut |done| progress(done * coarse_share));
+    let (elevations, scale) = elevations(&noise, exact_side, &mut |done| progress(done * coarse_share));
     let shape = Grid {
         side: exact_side as usize,
         heights: elevations.into_iter().map(|(base, mountain)| base + mountain * scale).collect(),
@@ -310,6 +305,9 @@ mod tests {
     fn rejects_sizes_a_heightmap_cannot_have() {
         let config = SceneConfig::default();
         assert!(matches!(island_heightmap(1, 1, &config, &mut |_| {}), Err(HeightmapError::TooSmall { .. })));
-        assert!(matches!(island_heightmap(1, 100_000, &config, &mut |_| {}), Err(HeightmapError::TooLarge { .. })));
+        assert!(matches!(
+            island_heightmap(1, 100_000, &config, &mut |_| {}),
+            Err(HeightmapError::TooLarge { .. })
+        ));
     }
 }

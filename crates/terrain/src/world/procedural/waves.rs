@@ -2,7 +2,7 @@
 //! water to tilt its surface with (two of them, drifting apart, so no pattern repeats visibly).
 
 use image::RgbaImage;
-use noise::{Fbm, MultiFractal, RidgedMulti, Perlin};
+use noise::{Fbm, MultiFractal, Perlin, RidgedMulti};
 
 use super::field::{Tileable, grid_from_fn, layer_seed};
 
@@ -35,7 +35,8 @@ pub fn wave_map(seed: u32, size: u32, cells: f64) -> RgbaImage {
     for (i, pixel) in image.pixels_mut().enumerate() {
         let (sx, sz) = slopes[i];
         let trough = 1.0 - (heights[i] - low) / (high - low).max(1e-9);
-        pixel.0 = [byte(0.5 + 0.5 * sx / steepest), byte(0.5 + 0.5 * sz / steepest), byte(trough * trough), 255];
+        pixel.0 =
+            [byte(0.5 + 0.5 * sx / steepest), byte(0.5 + 0.5 * sz / steepest), byte(trough * trough), 255];
     }
     image
 }
