@@ -172,3 +172,62 @@ fn exports_an_asset_folder_that_loads_again() {
     assert!(output.status.success(), "{text}");
     assert!(text.contains("course assets"), "{text}");
 }
+
+#[test]
+fn settings_files_set_the_look_and_the_view() {
+    let settings = scratch("course-view.toml");
+    std::fs::write(
+        &settings,
+        "look = \"course\"\n[view]\nposition = [0.0, 3.0, 12.0]\nyaw_degrees = 0.0\npitch_degrees = -5.0\n\
+         field_of_view_degrees = 45.0\ntime_seconds = 2.0\n",
+    )
+    .expect("write");
+    let (from_file, from_options) = (scratch("from-file.png"), scratch("from-options.png"));
+    let common = ["--size", "48x27", "--grid", "32", "--backend", "vulkan"];
+    let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let mut first = vec!["--settings".to_string(), path(&settings), "--screenshot".into(), path(&from_file)];
+    first.extend(common.iter().map(|s| s.to_string()));
+    let output = rayterra(&first.iter().map(String::as_str).collect::<Vec<_>>());
+    if no_gpu(&output) {
+        return;
+    }
+    let text = stderr(&output);
+    assert!(output.status.success(), "{text}");
+    // The memory is reported, with what a height sample costs.
+    assert!(text.contains("memory (CPU)") && text.contains("memory (GPU)"), "{text}");
+    assert!(text.contains("bytes in all"), "{text}");
+    assert!(text.contains("course look"), "{text}");
+    // The same picture from the command line's look and camera.
+    let mut second = vec!["--look", "course", "--camera", "0,3,12,0,-5", "--time", "2", "--screenshot"];
+    let second_out = path(&from_options);
+    second.push(&second_out);
+    second.extend(common);
+    let output = rayterra(&second);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(std::fs::read(&from_file).expect("first"), std::fs::read(&from_options).expect("second"));
+}
+
+#[test]
+fn bad_settings_are_named() {
+    let out = scratch("never-settings.png");
+    let out_arg = out.to_str().expect("utf-8 path");
+    let bad = scratch("bad.toml");
+    std::fs::write(&bad, "[fog]\ndensty = 0.1\n").expect("write");
+    let output =
+        rayterra(&["--settings", bad.to_str().expect("utf-8 path"), "--screenshot", out_arg, "--grid", "8"]);
+    assert_fails(&output, 1, "bad.toml");
+    assert!(stderr(&output).contains("densty"), "{}", stderr(&output));
+    let missing = scratch("missing-settings.toml");
+    let _ = std::fs::remove_file(&missing);
+    let output = rayterra(&[
+        "--settings",
+        missing.to_str().expect("utf-8 path"),
+        "--screenshot",
+        out_arg,
+        "--grid",
+        "8",
+    ]);
+    assert_fails(&output, 1, "missing-settings.toml");
+    assert_fails(&rayterra(&["--look", "fancy", "--screenshot", out_arg]), 2, "modern");
+    assert!(!out.exists());
+}

@@ -98,6 +98,15 @@ fn flat(colour: [u8; 3], size: u32) -> RgbaImage {
     RgbaImage::from_pixel(size, size, Rgba([colour[0], colour[1], colour[2], 255]))
 }
 
+/// The default procedural island (seed 1, 512 x 512), generated once per test binary.
+pub fn default_island() -> &'static World {
+    static WORLD: OnceLock<World> = OnceLock::new();
+    WORLD.get_or_init(|| {
+        terrain::world::procedural::generate(Default::default(), &SceneConfig::default(), &mut |_| {})
+            .expect("default world")
+    })
+}
+
 /// A world of flat colours that makes every part of the picture identifiable: land pure red, sky
 /// pure green, water pure blue, a neutral detail map (grey 128) unless given. Its heightmap has
 /// its left half under water (level 50, y = -0.75) and its right half above (level 180, y = 1.2).
