@@ -7,8 +7,9 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::image_io::{OutputFormat, write_image};
 use raytracer::integrator::photon::{self, PhotonStats};
+use raytracer::integrator::sppm::SppmStats;
 use raytracer::integrator::{Model, choose_model};
-use raytracer::render::{MAX_SPP, Progress, RenderStats, Stage};
+use raytracer::render::{DEFAULT_PATH_SPP, MAX_DEPTH_LIMIT, MAX_SPP, Progress, RenderStats, Stage};
 use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, SourceFile};
 use raytracer::{PreparedScene, RenderSettings, Sampling, TextureSearch};
 
@@ -24,6 +25,8 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render scene.txt -o scene.png --size 640x380\n  \
     rayterra render scene.txt --textures path/to/textures --spp 16\n  \
     rayterra render caustics.txt --model photon --photons 500000\n  \
+    rayterra render cornell-box.txt --model path --spp 256 -o out.exr\n  \
+    rayterra render caustics.txt --model sppm --passes 64 --photons 200000\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
     /// Scene file in the course scene language; without it, the built-in showcase scene.
@@ -37,8 +40,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
 
-    /// Stratified samples in every pixel, instead of adaptive anti-aliasing (one sample per
-    /// pixel, 16 on edges, contrasts and noisy pixels).
+    /// Samples in every pixel. Classic and photon models: stratified, instead of adaptive
+    /// anti-aliasing (one sample per pixel, 16 on edges, contrasts and noisy pixels); path model:
+    /// the paths a pixel [default: 64].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
 
@@ -60,13 +64,26 @@ pub struct RenderArgs {
     pub seed: u64,
 
     /// Light-transport model [default: the scene's `algorithm=`, else classic]. classic: the
-    /// course's ray tracer; photon: the course's photon mapper (caustics, indirect light).
+    /// course's ray tracer; photon: the course's photon mapper (caustics, indirect light); path:
+    /// a physically based path tracer; sppm: physically based stochastic progressive photon
+    /// mapping (caustics seen directly and in mirrors).
     #[arg(long, value_name = "MODEL", value_parser = parse_model)]
     pub model: Option<Model>,
 
-    /// Photons to emit (photon model), instead of the scene's `emit_photons=`.
+    /// Photons to emit (photon model), or photons a pass (sppm), instead of the scene's
+    /// `emit_photons=`.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_EMITTED_PHOTONS))]
     pub photons: Option<u64>,
+
+    /// Passes of the sppm model, instead of the scene's `iterations=`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=scene::MAX_ITERATIONS))]
+    pub passes: Option<u64>,
+
+    /// Longest light path of the path and sppm models, in segments (1: lights seen directly; 2:
+    /// direct light; ...).
+    #[arg(long, value_name = "N", default_value_t = 10,
+          value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    pub max_depth: u32,
 
     /// Parse and validate the scene (textures included) and print the warnings; render nothing.
     #[arg(long)]
@@ -133,16 +150,25 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     print_diagnostics(&notes);
     settings.model = model;
     settings.photons = args.photons;
-    if args.photons.is_some() && !model.uses_photons() {
-        eprintln!("warning: --photons has no effect on the {} model", model.name());
-    }
-    if model.uses_photons() {
-        photon::check_memory(&settings.photon_settings(&prepared), settings.memory_limit).map_err(|d| {
-            print_diagnostics(&[d]);
-            fail(&format!("`{}` asks for too large a photon map; nothing was rendered", source.name()))
-        })?;
-    }
+    settings.passes = args.passes;
+    settings.max_depth = args.max_depth;
+    warn_unused_options(&args, model);
     scene::check_image_size(settings.width, settings.height).map_err(|m| fail(&m))?;
+    let photon_settings = settings.photon_settings(&prepared);
+    let memory = match model {
+        Model::Photon => photon::check_memory(&photon_settings, settings.memory_limit),
+        Model::Sppm => raytracer::integrator::sppm::check_memory(
+            &photon_settings,
+            settings.width as u64 * settings.height as u64,
+            settings.max_depth,
+            settings.memory_limit,
+        ),
+        Model::Classic | Model::Path => Ok(()),
+    };
+    memory.map_err(|d| {
+        print_diagnostics(&[d]);
+        fail(&format!("`{}` asks for more memory than a render may use; nothing was rendered", source.name()))
+    })?;
     let format = OutputFormat::from_path(&args.output).map_err(|e| fail(&e.to_string()))?;
     if format.is_linear() && args.gamma {
         eprintln!("warning: --gamma has no effect on linear {format:?} output");
@@ -171,6 +197,8 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
             Stage::BuildingPhotonMap => "building map",
             Stage::Tracing => "tracing rows",
             Stage::Refining => "refining pixels",
+            Stage::Sampling => "samples",
+            Stage::Passes => "passes",
         };
         if bar.message() != message {
             bar.set_message(message);
@@ -207,6 +235,25 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     Ok(())
 }
 
+/// Warns about options the chosen model does not read.
+fn warn_unused_options(args: &RenderArgs, model: Model) {
+    let name = model.name();
+    if args.photons.is_some() && !model.uses_photons() {
+        eprintln!("warning: --photons has no effect on the {name} model");
+    }
+    if args.passes.is_some() && model != Model::Sppm {
+        eprintln!("warning: --passes has no effect on the {name} model (only on sppm)");
+    }
+    if args.max_depth != 10 && !model.is_physically_based() {
+        eprintln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
+    }
+    if args.spp.is_some() && model == Model::Sppm {
+        eprintln!(
+            "warning: --spp has no effect on the sppm model (one camera path a pixel a pass; use --passes)"
+        );
+    }
+}
+
 fn progress_bar(quiet: bool) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
@@ -229,6 +276,10 @@ fn print_summary(
     render: Duration,
 ) {
     println!("wrote {}", output.display());
+    if settings.model.is_physically_based() {
+        print_physical_summary(settings, stats, prepare, render);
+        return;
+    }
     // The photon phase is reported on its own line; the pixel phase is the rest.
     let photon_phase = stats.photons.map_or(Duration::ZERO, |p| p.trace_time + p.build_time);
     if let Some(p) = &stats.photons {
@@ -259,6 +310,60 @@ fn print_summary(
             stats.lookups as f64 / seconds / 1e6
         );
     }
+}
+
+/// The summary of a path or SPPM render: samples (or passes and photons) a second.
+fn print_physical_summary(
+    settings: &RenderSettings,
+    stats: &RenderStats,
+    prepare: Duration,
+    render: Duration,
+) {
+    let seconds = render.as_secs_f64().max(1e-9);
+    let threads = stats.threads.max(1) as f64;
+    println!(
+        "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
+        settings.width,
+        settings.height,
+        seconds,
+        prepare.as_secs_f64(),
+        stats.threads,
+        settings.model.name(),
+        settings.max_depth
+    );
+    match stats.sppm {
+        Some(SppmStats { passes, photons, stored, mean_radius, photon_seconds, .. }) => {
+            println!(
+                "{passes} passes of {} photons ({photons} emitted, {stored} stored, {:.1} s tracing them), \
+                 {:.2} passes/s, {:.2} M photons/s; mean final radius {mean_radius:.4}",
+                photons / passes.max(1),
+                photon_seconds,
+                passes as f64 / seconds,
+                photons as f64 / seconds / 1e6,
+            );
+        }
+        None => {
+            let spp = settings.path_spp();
+            let rate = stats.camera_samples as f64 / seconds;
+            println!(
+                "{spp} samples a pixel{}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
+                if spp == DEFAULT_PATH_SPP && settings.sampling == Sampling::Adaptive {
+                    " (default)"
+                } else {
+                    ""
+                },
+                stats.camera_samples,
+                rate / 1e6,
+                rate / 1e6 / threads
+            );
+        }
+    }
+    println!(
+        "{} rays, {:.1} M rays/s ({:.1} M rays/s per thread)",
+        stats.rays,
+        stats.rays as f64 / seconds / 1e6,
+        stats.rays as f64 / seconds / 1e6 / threads
+    );
 }
 
 fn print_photon_summary(p: &PhotonStats) {
