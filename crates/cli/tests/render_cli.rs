@@ -146,9 +146,23 @@ fn bad_requests_are_refused_without_output() {
 fn help_lists_every_option() {
     let out = rayterra(&["render", "--help"], Path::new("."));
     let help = text(&out.stdout);
-    for option in
-        ["--output", "--size", "--spp", "--threads", "--textures", "--gamma", "--check", "--seed", "--quiet"]
-    {
+    for option in [
+        "--output",
+        "--size",
+        "--spp",
+        "--threads",
+        "--textures",
+        "--gamma",
+        "--check",
+        "--seed",
+        "--quiet",
+        "--model",
+        "--photons",
+        "--passes",
+        "--max-depth",
+        "path",
+        "sppm",
+    ] {
         assert!(help.contains(option), "{option} missing from:\n{help}");
     }
 }
@@ -202,9 +216,12 @@ fn algorithm_picks_the_model_and_unknown_values_are_errors() {
     let out = rayterra(&["render", "pm.txt", "--check"], dir.path());
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(text(&out.stdout).contains("photon model"), "{}", text(&out.stdout));
-    std::fs::write(dir.path().join("sppm.txt"), with("SPPM")).expect("write scene");
-    let out = rayterra(&["render", "sppm.txt", "--check"], dir.path());
-    assert!(text(&out.stderr).contains("`algorithm= SPPM`"), "{}", text(&out.stderr));
+    for value in ["SPPM", "PPM", "sppm"] {
+        std::fs::write(dir.path().join("sppm.txt"), with(value)).expect("write scene");
+        let out = rayterra(&["render", "sppm.txt", "--check"], dir.path());
+        assert!(out.status.success() && out.stderr.is_empty(), "{value}: {}", text(&out.stderr));
+        assert!(text(&out.stdout).contains("sppm model"), "{value}: {}", text(&out.stdout));
+    }
     std::fs::write(dir.path().join("bad.txt"), with("MLT")).expect("write scene");
     let out = rayterra(&["render", "bad.txt", "-o", "out.png"], dir.path());
     assert_eq!(out.status.code(), Some(1));
@@ -243,4 +260,75 @@ fn a_full_photon_map_is_reported() {
     assert!(out.status.success());
     let stderr = text(&out.stderr);
     assert!(stderr.contains("warning: the photon map was full (`max_photons= 2000`)"), "{stderr}");
+}
+
+#[test]
+fn the_path_model_reports_samples_a_second_and_writes_linear_or_tone_mapped_images() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), PHOTON_SCENE).expect("write scene");
+    let out = rayterra(
+        &["render", "scene.txt", "--model", "path", "--spp", "8", "--max-depth", "6", "-o", "out.exr"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("path model, paths of at most 6 segments"), "{stdout}");
+    assert!(stdout.contains("8 samples a pixel, 9600 samples") && stdout.contains("M samples/s"), "{stdout}");
+    assert!(text(&out.stderr).is_empty(), "{}", text(&out.stderr));
+    let hdr = image::open(dir.path().join("out.exr")).expect("an EXR").to_rgb32f();
+    assert!(hdr.pixels().any(|p| p.0[0] > 0.0), "the floor is lit");
+    let out = rayterra(
+        &["render", "scene.txt", "--model", "path", "--spp", "2", "-q", "-o", "out.png"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(image::open(dir.path().join("out.png")).is_ok());
+}
+
+#[test]
+fn the_sppm_model_reports_passes_and_photons_and_warns_about_unused_options() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), PHOTON_SCENE).expect("write scene");
+    let out = rayterra(
+        &[
+            "render",
+            "scene.txt",
+            "--model",
+            "sppm",
+            "--passes",
+            "3",
+            "--photons",
+            "4000",
+            "--spp",
+            "4",
+            "-o",
+            "out.png",
+        ],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("3 passes of 4000 photons (12000 emitted"), "{stdout}");
+    assert!(stdout.contains("passes/s") && stdout.contains("M photons/s"), "{stdout}");
+    assert!(text(&out.stderr).contains("--spp has no effect on the sppm model"), "{}", text(&out.stderr));
+    let out = rayterra(
+        &["render", "scene.txt", "--passes", "3", "--max-depth", "4", "-q", "-o", "c.png"],
+        dir.path(),
+    );
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("--passes has no effect on the classic model"), "{stderr}");
+    assert!(stderr.contains("--max-depth has no effect on the classic model"), "{stderr}");
+}
+
+#[test]
+fn sppm_refuses_more_pixels_than_max_hitpoints_allows() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let scene = PHOTON_SCENE.replace("emit_photons= 20000\n", "emit_photons= 20000\n max_hitpoints= 1000\n");
+    std::fs::write(dir.path().join("scene.txt"), scene).expect("write scene");
+    let out = rayterra(&["render", "scene.txt", "--model", "sppm", "-o", "out.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("1200 pixels, but `max_hitpoints= 1000` allows fewer"), "{stderr}");
+    assert!(stderr.contains("scene.txt:9:"), "{stderr}");
+    assert!(!dir.path().join("out.png").exists());
 }

@@ -3,6 +3,8 @@
 
 #![allow(dead_code)] // each test binary uses a part of this module
 
+pub mod pbr;
+
 use std::path::{Path, PathBuf};
 
 use image::RgbImage;
