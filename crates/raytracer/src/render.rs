@@ -42,7 +42,7 @@ use crate::integrator::sppm::{self, SppmSettings, SppmStats};
 use crate::integrator::{Classic, Model};
 use crate::prepare::{Hit, PreparedScene};
 use crate::sampler::{ExactSum, PixelRng, Siblings, Strata, stream};
-use crate::scene::{Diagnostic, PhotonSettings, check_image_size};
+use crate::scene::{Algorithm, Diagnostic, PhotonSettings, check_image_size};
 
 /// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
 pub const REFINE_GRID: u32 = 4;
@@ -139,7 +139,11 @@ impl RenderSettings {
 
     /// The SPPM settings: the scene's photon keys with this render's overrides.
     pub fn sppm_settings(&self, scene: &PreparedScene) -> SppmSettings {
-        SppmSettings::new(&self.photon_settings(scene), self.passes, self.max_depth, self.seed)
+        let progressive = matches!(
+            scene.scene.camera.algorithm,
+            Some((Algorithm::ProgressivePhotonMapping | Algorithm::StochasticProgressivePhotonMapping, _))
+        );
+        SppmSettings::new(&self.photon_settings(scene), progressive, self.passes, self.max_depth, self.seed)
     }
 }
 

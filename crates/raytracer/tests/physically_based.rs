@@ -179,7 +179,7 @@ fn tiles_and_sample_ranges_merge_into_the_same_values() {
     let sppm_settings = SppmSettings {
         passes: 2,
         photons: 2000,
-        ..SppmSettings::new(&scene.scene.camera.photons, None, 10, 0)
+        ..SppmSettings::new(&scene.scene.camera.photons, false, None, 10, 0)
     };
     let camera = camera_for(&scene, &settings);
     let (all, _) = sppm::render(&scene, &camera, &sppm_settings, (16, 12), (0, 0, 16, 12), &|_| {});

@@ -102,16 +102,8 @@ impl<'s> Lights<'s> {
     pub fn new(scene: &'s PreparedScene) -> Lights<'s> {
         let s = &scene.scene;
         let powers = light_powers(s);
-        let shapes: Vec<(u32, Shape)> = s
-            .lights
-            .iter()
-            .enumerate()
-            .filter_map(|(i, l)| match l {
-                Light::Point { .. } => None,
-                Light::Square { shape, .. } => Some((i as u32, Shape::Square(shape.clone()))),
-                Light::Sphere { shape, .. } => Some((i as u32, Shape::Sphere(shape.clone()))),
-            })
-            .collect();
+        let shapes: Vec<(u32, Shape)> =
+            s.lights.iter().enumerate().filter_map(|(i, l)| Some((i as u32, l.shape()?))).collect();
         let mut b = Bounds::EMPTY.include(s.camera.eye);
         for p in &s.primitives {
             if let Some(pb) = p.shape.bounds() {

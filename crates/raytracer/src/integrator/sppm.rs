@@ -22,8 +22,11 @@
 //!    Lambertian lobe.
 //!
 //! After `P` passes of `N` photons a pixel is `direct / P + tau / (P N pi r^2)`. The initial
-//! radius is `sample_dist=` when the scene sets it, otherwise [`AUTO_RADIUS_PIXELS`] pixel
-//! footprints at the first visible point (the camera path's length times the angle of a pixel).
+//! radius is `sample_dist=` in a file that chooses progressive photon mapping itself
+//! (`algorithm= PPM` or `SPPM`, as students' progressive renderers read it); otherwise it is
+//! [`AUTO_RADIUS_PIXELS`] pixel footprints at the pixel's first visible point (the camera path's
+//! length times the angle of a pixel), at most `sample_dist=` (which the course's photon mapper
+//! reads as its largest gathering radius).
 //!
 //! Photons are traced in batches of [`BATCH`] (a photon map each), so memory stays bounded
 //! whatever the count; the statistics of a pass sum over its batches. Everything is
@@ -85,9 +88,11 @@ pub struct SppmSettings {
     pub photons: u64,
     /// Radius reduction `gamma` (`reduction=`), in (0, 1].
     pub reduction: f64,
-    /// Initial radius (`sample_dist=` when the scene sets it); `None`: [`AUTO_RADIUS_PIXELS`]
-    /// pixel footprints.
+    /// Initial radius (`sample_dist=` in a file with `algorithm= PPM|SPPM`); `None`:
+    /// [`AUTO_RADIUS_PIXELS`] pixel footprints, at most `max_radius`.
     pub initial_radius: Option<f64>,
+    /// The largest automatic initial radius (`sample_dist=`).
+    pub max_radius: f64,
     /// Deepest light path, in segments.
     pub max_depth: u32,
     /// Seed of all random streams.
@@ -95,13 +100,23 @@ pub struct SppmSettings {
 }
 
 impl SppmSettings {
-    /// The settings a scene's photon keys give, with a render's overrides.
-    pub fn new(photons: &PhotonSettings, passes: Option<u64>, max_depth: u32, seed: u64) -> SppmSettings {
+    /// The settings a scene's photon keys give, with a render's overrides. `progressive` says
+    /// whether the file chose progressive photon mapping itself (`algorithm= PPM|SPPM`), which
+    /// makes `sample_dist=` the initial radius.
+    pub fn new(
+        photons: &PhotonSettings,
+        progressive: bool,
+        passes: Option<u64>,
+        max_depth: u32,
+        seed: u64,
+    ) -> SppmSettings {
+        let set = photons.location_of("sample_dist").is_some();
         SppmSettings {
             passes: passes.unwrap_or(photons.iterations),
             photons: photons.emit_photons,
             reduction: photons.reduction,
-            initial_radius: photons.location_of("sample_dist").map(|_| photons.sample_dist),
+            initial_radius: (progressive && set).then_some(photons.sample_dist),
+            max_radius: if set { photons.sample_dist } else { f64::INFINITY },
             max_depth,
             seed,
         }
