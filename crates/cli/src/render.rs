@@ -149,6 +149,10 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let (model, notes) = choose_model(&prepared.scene, args.model);
     print_diagnostics(&notes);
     settings.model = model;
+    if args.spp.is_none() && model == Model::Path {
+        // The classic model's 16 samples for a lens are not the path tracer's default.
+        settings.sampling = Sampling::Adaptive;
+    }
     settings.photons = args.photons;
     settings.passes = args.passes;
     settings.max_depth = args.max_depth;

@@ -70,6 +70,8 @@ pub struct Lights<'s> {
     emission: Discrete,
     /// The light shapes, which block rays: (light index, shape).
     shapes: Vec<(u32, Shape)>,
+    /// The area of each square light (0 for the others).
+    areas: Vec<f64>,
     /// The bounding sphere of the scene's bounded objects, lights and camera (centre, radius).
     bounds: (DVec3, f64),
 }
@@ -123,8 +125,17 @@ impl<'s> Lights<'s> {
         let env_power = PI * radius * radius * 4.0 * PI * mean(environment_mean(s));
         let mut emission_weights = powers.clone();
         emission_weights.push(env_power);
+        let areas = s
+            .lights
+            .iter()
+            .map(|l| match l {
+                Light::Square { shape, .. } => square_area(&shape.dx, &shape.dy),
+                _ => 0.0,
+            })
+            .collect();
         Lights {
             scene,
+            areas,
             choose: Discrete::new(&powers),
             emission: Discrete::new(&emission_weights),
             shapes,
@@ -186,7 +197,7 @@ impl<'s> Lights<'s> {
                 if cos <= 1e-12 || d2 <= 0.0 {
                     return None;
                 }
-                let area = square_area(&shape.dx, &shape.dy);
+                let area = self.areas[index];
                 Some(LightSample {
                     light: light_index,
                     wi,
@@ -236,7 +247,7 @@ impl<'s> Lights<'s> {
                 if cos <= 1e-12 {
                     return 0.0;
                 }
-                p_light * t * t / (square_area(&shape.dx, &shape.dy) * cos)
+                p_light * t * t / (self.areas[light as usize] * cos)
             }
             Light::Sphere { shape, .. } => {
                 let d2 = (shape.centre - p).length_squared();
