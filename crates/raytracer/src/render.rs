@@ -164,7 +164,8 @@ pub enum Stage {
     Passes,
 }
 
-/// A progress report: `done` of `total` units (rows while tracing, pixels while refining).
+/// A progress report: `done` of `total` units (rows while tracing, pixels while refining, samples
+/// while path tracing, passes of SPPM).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Progress {
     /// The stage.
@@ -287,7 +288,7 @@ pub fn render(
                 progress(Progress { stage: Stage::Passes, done: 0, total });
                 let report = |done| progress(Progress { stage: Stage::Passes, done, total });
                 let (colors, stats) =
-                    sppm::render(scene, &camera, &sppm_settings, (w, h), (0, 0, w, h), &report);
+                    sppm::render(scene, &camera, &sppm_settings, w, PixelRect::full(w, h), &report);
                 Rendered {
                     image: Image::new(w, h, colors.iter().map(|c| c.as_vec3().to_array()).collect()),
                     stats: RenderStats {

@@ -182,8 +182,9 @@ fn tiles_and_sample_ranges_merge_into_the_same_values() {
         ..SppmSettings::new(&scene.scene.camera.photons, false, None, 10, 0)
     };
     let camera = camera_for(&scene, &settings);
-    let (all, _) = sppm::render(&scene, &camera, &sppm_settings, (16, 12), (0, 0, 16, 12), &|_| {});
-    let (corner, _) = sppm::render(&scene, &camera, &sppm_settings, (16, 12), (8, 6, 16, 12), &|_| {});
+    let (all, _) = sppm::render(&scene, &camera, &sppm_settings, 16, PixelRect::full(16, 12), &|_| {});
+    let corner_rect = PixelRect { x0: 8, y0: 6, x1: 16, y1: 12 };
+    let (corner, _) = sppm::render(&scene, &camera, &sppm_settings, 16, corner_rect, &|_| {});
     for (i, c) in corner.iter().enumerate() {
         let (x, y) = (8 + i % 8, 6 + i / 8);
         assert_eq!(*c, all[y * 16 + x], "sppm pixel ({x}, {y})");

@@ -292,7 +292,8 @@ impl<'s> Lights<'s> {
             Light::Square { shape, .. } => {
                 let point = shape.point_at(2.0 * rng.uniform() - 1.0, 2.0 * rng.uniform() - 1.0);
                 let side = if rng.uniform() < 0.5 { shape.normal } else { -shape.normal };
-                let magnitude = Shape::Square(shape.clone()).magnitude().max(point.abs().max_element());
+                let magnitude = (shape.centre.abs().max_element() + shape.dx.length() + shape.dy.length())
+                    .max(point.abs().max_element());
                 let dir = cosine_hemisphere(side, rng.uniform(), rng.uniform());
                 (offset_origin(point, side, magnitude), dir)
             }

@@ -46,6 +46,7 @@ use crate::integrator::lights::Lights;
 use crate::integrator::path::{Vertex, walk};
 use crate::integrator::photon_map::{MapEntry, PhotonMap};
 use crate::prepare::PreparedScene;
+use crate::render::PixelRect;
 use crate::sampler::{PixelRng, stream};
 use crate::scene::{Diagnostic, PhotonSettings, Severity};
 
@@ -217,36 +218,37 @@ struct VisiblePoint {
     m: u64,
 }
 
-/// Renders the pixel rectangle `x0..x1, y0..y1` of a `width x height` image (row-major result)
-/// with SPPM. `progress(pass)` is called after each pass.
-#[allow(clippy::too_many_arguments)]
+/// Renders the pixels `rect` (row-major result) of an image `image_width` pixels wide, seen
+/// through `camera`, with SPPM. `progress(passes)` is called after each pass.
 pub fn render(
     scene: &PreparedScene,
     camera: &Camera,
     settings: &SppmSettings,
-    (width, height): (u32, u32),
-    (x0, y0, x1, y1): (u32, u32, u32, u32),
+    image_width: u32,
+    rect: PixelRect,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<DVec3>, SppmStats) {
     let lights = Lights::new(scene);
-    let w = (x1 - x0) as usize;
-    let pixels = w * (y1 - y0) as usize;
+    let w = rect.x1.saturating_sub(rect.x0) as usize;
+    let pixels = rect.len();
+    if pixels == 0 {
+        return (Vec::new(), SppmStats::default());
+    }
     let mut states = vec![PixelState::default(); pixels];
     let mut points = vec![VisiblePoint::default(); pixels];
     let rays = AtomicU64::new(0);
     let mut stats = SppmStats::default();
     let cam = &scene.scene.camera;
-    let pixel_angle = cam.lens_width / width as f64;
+    let pixel_angle = cam.lens_width / image_width as f64;
     let mut photon_seconds = 0.0;
-    let _ = height;
     for pass in 0..settings.passes {
         // 1. Camera pass.
         points.par_chunks_mut(w).zip(states.par_chunks_mut(w)).enumerate().for_each(
             |(row, (points, states))| {
-                let y = y0 + row as u32;
+                let y = rect.y0 + row as u32;
                 let mut row_rays = 0;
                 for (i, (vp, state)) in points.iter_mut().zip(states.iter_mut()).enumerate() {
-                    let x = x0 + i as u32;
+                    let x = rect.x0 + i as u32;
                     let mut rng = PixelRng::for_sample(settings.seed, stream::SPPM_CAMERA, x, y, pass);
                     let (dx, dy) = (rng.uniform(), rng.uniform());
                     let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
