@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::image_io::{OutputFormat, write_image};
+use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::sppm::SppmStats;
 use raytracer::integrator::{Model, choose_model};
@@ -81,7 +82,7 @@ pub struct RenderArgs {
 
     /// Longest light path of the path and sppm models, in segments (1: lights seen directly; 2:
     /// direct light; ...).
-    #[arg(long, value_name = "N", default_value_t = 10,
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_DEPTH,
           value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     pub max_depth: u32,
 
@@ -248,7 +249,7 @@ fn warn_unused_options(args: &RenderArgs, model: Model) {
     if args.passes.is_some() && model != Model::Sppm {
         eprintln!("warning: --passes has no effect on the {name} model (only on sppm)");
     }
-    if args.max_depth != 10 && !model.is_physically_based() {
+    if args.max_depth != DEFAULT_MAX_DEPTH && !model.is_physically_based() {
         eprintln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
     }
     if args.spp.is_some() && model == Model::Sppm {
