@@ -144,7 +144,7 @@ fn lights_of_every_type() {
 #[test]
 fn material_keys_and_defaults() {
     let p = ok(SPHERE);
-    assert_eq!(p.scene.primitives[0].material, crate::material::Material::default());
+    assert_eq!(*p.scene.primitives[0].material, crate::material::Material::default());
     let text = "primitive sphere\n O= 0 0 0\n R= 1\n color= 0.5 0.6 0.7\n texture= marble.bmp\n diff= 0.1\n \
                 spec= 0.2\n refl= 0.3\n drefl= 0.4\n blur= exp\n refr= 0.5\n rindex= 1.5\n absor= 1 2 3\nend\n";
     let m = &ok(text).scene.primitives[0].material;
@@ -249,7 +249,7 @@ fn unknown_keys_blocks_and_types_are_warnings() {
     let text = "primitive sphere\n O= 0 0 0\n R= 1\n shininess= 3\n o= 1 1 1\nend\n\
                 fog\n density= 3\nend\n\
                 light laser\n O= 0 0 0\nend\n\
-                primitive triangle\n P0= 0 0 0\nend\n";
+                primitive torus\n O= 0 0 0\nend\n";
     assert_eq!(
         diagnostics(text),
         vec![
@@ -261,7 +261,7 @@ fn unknown_keys_blocks_and_types_are_warnings() {
                 Severity::Warning,
                 13,
                 11,
-                "`primitive triangle` is not supported yet; the block is skipped".into()
+                "`primitive torus` is not part of the scene language (the renderers that read it ignored it too); the block is skipped".into()
             ),
         ]
     );
@@ -448,7 +448,7 @@ fn required_keys_are_errors_at_the_header() {
     );
     assert_eq!(
         single_error("primitive\nend\n"),
-        (1, 1, "`primitive` needs a type: `sphere`, `plane`, `square` or `cylinder`".into())
+        (1, 1, "`primitive` needs a type: `sphere`, `plane`, `square`, `cylinder`, `triangle`, `mesh`, `polyhedron` or `bezier`".into())
     );
 }
 
