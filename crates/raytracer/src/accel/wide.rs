@@ -33,9 +33,9 @@ const BINS: usize = 16;
 const PARALLEL_ITEMS: usize = 16 * 1024;
 /// Most items a tree may hold (leaf references keep 28 bits for the first item).
 pub const MAX_ITEMS: usize = (1 << 28) - 1;
-/// Deepest traversal stack needed: a 4-wide tree of 2^28 items is far shallower; the builder
-/// forces splits, so even degenerate inputs stay within it.
-const STACK: usize = 128;
+/// Entries of the traversal stack kept in a fixed array (enough for the paths of trees 10 levels
+/// deep even when every level leaves three children behind); longer paths spill to the heap.
+const STACK: usize = 32;
 
 /// Leaf flag of a child reference: bits 0..28 the first item, bits 28..31 the item count minus 1.
 const LEAF: u32 = 1 << 31;
@@ -44,7 +44,7 @@ const EMPTY: u32 = u32::MAX;
 
 /// A node: the boxes of up to four children and what they are.
 #[derive(Clone, Debug)]
-#[repr(C, align(16))]
+#[repr(C, align(64))]
 pub struct Node {
     /// Lower bounds per axis (x, y, z), one lane per child. Unused lanes hold an empty box.
     lo: [[f32; WIDTH]; 3],
@@ -146,6 +146,8 @@ pub struct BoxRay {
     /// Component-wise inverse of the direction (zero components replaced by a tiny value of the
     /// same sign, so no test produces NaN).
     pub inv_dir: [f32; 3],
+    /// `inv_dir` widened by a few ulps (see [`FAR_SCALE`]), for the far distance of slab tests.
+    pub inv_dir_far: [f32; 3],
     /// Whether each direction component is negative (the near face is then the upper one).
     pub negative: [bool; 3],
 }
@@ -168,7 +170,12 @@ impl BoxRay {
             1.0 / d
         };
         let inv_dir = [inv(dir[0]), inv(dir[1]), inv(dir[2])];
-        BoxRay { origin, inv_dir, negative: [inv_dir[0] < 0.0, inv_dir[1] < 0.0, inv_dir[2] < 0.0] }
+        BoxRay {
+            origin,
+            inv_dir,
+            inv_dir_far: inv_dir.map(|i| i * FAR_SCALE),
+            negative: [inv_dir[0] < 0.0, inv_dir[1] < 0.0, inv_dir[2] < 0.0],
+        }
     }
 }
 
@@ -190,9 +197,10 @@ fn node_distances(node: &Node, ray: &BoxRay, t_max: f32) -> [f32; WIDTH] {
         };
         let o = ray.origin[axis];
         let inv = ray.inv_dir[axis];
+        let inv_far = ray.inv_dir_far[axis];
         for lane in 0..WIDTH {
             let tn = (n[lane] - o) * inv;
-            let tf = (f[lane] - o) * inv * FAR_SCALE;
+            let tf = (f[lane] - o) * inv_far;
             near[lane] = if tn > near[lane] { tn } else { near[lane] };
             far[lane] = if tf < far[lane] { tf } else { far[lane] };
         }
@@ -344,8 +352,7 @@ impl WideBvh {
         if self.root == EMPTY {
             return;
         }
-        let mut stack = [(0u32, 0.0f32); STACK];
-        let mut top = 0usize;
+        let mut stack = Stack::new();
         let mut current = self.root;
         loop {
             if current & LEAF != 0 {
@@ -357,46 +364,98 @@ impl WideBvh {
             } else {
                 let node = &self.nodes[current as usize];
                 let dist = node_distances(node, ray, t_max);
-                // Gather the children hit, nearest first.
-                let mut hits = [(0u32, 0.0f32); WIDTH];
-                let mut n = 0;
-                for (&d, &child) in dist.iter().zip(&node.child) {
-                    if d < f32::INFINITY {
-                        let entry = (child, d);
+                let mut mask = 0u32;
+                for (lane, d) in dist.iter().enumerate() {
+                    mask |= ((*d < f32::INFINITY) as u32) << lane;
+                }
+                // The common cases first: one child hit, or two.
+                if mask != 0 {
+                    let a = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        current = node.child[a];
+                        continue;
+                    }
+                    let b = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        let (near, far) = if dist[a] <= dist[b] { (a, b) } else { (b, a) };
+                        stack.push((node.child[far], dist[far]));
+                        current = node.child[near];
+                        continue;
+                    }
+                    // Three or four: sort them, push all but the nearest (farthest first).
+                    let mut hits = [(0u32, f32::INFINITY); WIDTH];
+                    let mut n = 0;
+                    mask |= 1 << a | 1 << b;
+                    while mask != 0 {
+                        let lane = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let entry = (node.child[lane], dist[lane]);
                         let mut j = n;
-                        while j > 0 && hits[j - 1].1 > entry.1 {
+                        while j > 0 && hits[j - 1].1 < entry.1 {
                             hits[j] = hits[j - 1];
                             j -= 1;
                         }
                         hits[j] = entry;
                         n += 1;
                     }
-                }
-                if n > 0 {
-                    // Push the farther ones (farthest first), go on with the nearest.
-                    for k in (1..n).rev() {
-                        if top < STACK {
-                            stack[top] = hits[k];
-                            top += 1;
-                        }
+                    for &h in &hits[..n - 1] {
+                        stack.push(h);
                     }
-                    current = hits[0].0;
+                    current = hits[n - 1].0;
                     continue;
                 }
             }
             // Pop the next subtree that is still within reach.
             loop {
-                if top == 0 {
-                    return;
-                }
-                top -= 1;
-                let (r, d) = stack[top];
-                if d <= t_max {
-                    current = r;
-                    break;
+                match stack.pop() {
+                    None => return,
+                    Some((r, d)) if d <= t_max => {
+                        current = r;
+                        break;
+                    }
+                    Some(_) => {}
                 }
             }
         }
+    }
+}
+
+/// The traversal stack: a fixed array, spilling to the heap in the (degenerate) case of a tree
+/// deeper than it holds.
+struct Stack {
+    fixed: [(u32, f32); STACK],
+    top: usize,
+    spill: Vec<(u32, f32)>,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Stack {
+        Stack { fixed: [(0, 0.0); STACK], top: 0, spill: Vec::new() }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, entry: (u32, f32)) {
+        if self.top < STACK {
+            self.fixed[self.top] = entry;
+            self.top += 1;
+        } else {
+            self.spill.push(entry);
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        if let Some(e) = self.spill.pop() {
+            return Some(e);
+        }
+        if self.top == 0 {
+            return None;
+        }
+        self.top -= 1;
+        Some(self.fixed[self.top])
     }
 }
 
