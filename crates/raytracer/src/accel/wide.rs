@@ -9,8 +9,9 @@
 //!
 //! Build: top-down, binned surface-area heuristic over all three axes; each node splits its items
 //! into up to four groups by splitting the group with the largest box again until there are four
-//! (the usual way of collapsing a binary SAH tree into a 4-wide one, done while building). Large
-//! subtrees are built in parallel; the result does not depend on the thread count.
+//! (the usual way of collapsing a binary SAH tree into a 4-wide one, done while building); a
+//! group that fits in a leaf becomes one. Large subtrees are built and large groups binned in
+//! parallel; the result does not depend on the thread count.
 //!
 //! Traversal: nearest child first, with a small explicit stack; boxes are rounded outwards when
 //! built and the far distance of a slab test is widened by a few ulps, so no ray slips past a box
@@ -277,7 +278,8 @@ impl WideBvh {
         }
         let params = BuildParams { max_leaf: params.max_leaf.clamp(1, MAX_LEAF), ..params };
         let mut nodes = Vec::with_capacity(items.len() / 3 + 1);
-        let root = build_subtree(&mut items, 0, &mut nodes, params);
+        let bounds = items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+        let root = build_subtree(&mut items, 0, bounds, &mut nodes, params);
         bvh.order = items.iter().map(|it| it.index).collect();
         bvh.nodes = nodes;
         bvh.root = root.reference;
@@ -470,16 +472,16 @@ fn leaf_reference(first: u32, count: u32) -> u32 {
     LEAF | (count - 1) << 28 | first
 }
 
-/// Builds the subtree over `items` (whose first item is item `offset` of the whole order) and
-/// appends its nodes to `nodes`; returns its box and reference.
+/// Builds the subtree over `items` (whose first item is item `offset` of the whole order, and
+/// whose box is `bounds`) and appends its nodes to `nodes`; returns its box and reference.
 fn build_subtree(
     items: &mut [BuildItem],
     offset: usize,
+    bounds: Box32,
     nodes: &mut Vec<Node>,
     params: BuildParams,
 ) -> Built {
-    let bounds = items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
-    if items.len() <= params.max_leaf && !worth_splitting(items, &bounds, params) {
+    if items.len() <= params.max_leaf {
         return Built { bounds, reference: leaf_reference(offset as u32, items.len() as u32) };
     }
     // Split into up to four groups: split the group with the largest box until there are four
@@ -489,17 +491,13 @@ fn build_subtree(
         let candidate = groups
             .iter()
             .enumerate()
-            .filter(|(_, (s, e, b))| {
-                let n = e - s;
-                n > params.max_leaf || (n > 1 && worth_splitting(&items[*s..*e], b, params))
-            })
+            .filter(|(_, (s, e, _))| e - s > params.max_leaf)
             .max_by(|a, b| a.1.2.half_area().total_cmp(&b.1.2.half_area()))
             .map(|(i, _)| i);
         let Some(g) = candidate else { break };
-        let (s, e, _) = groups[g];
-        let mid = s + split(&mut items[s..e], params);
-        let left = items[s..mid].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
-        let right = items[mid..e].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+        let (s, e, group_bounds) = groups[g];
+        let (count, left, right) = split(&mut items[s..e], &group_bounds, params);
+        let mid = s + count;
         groups[g] = (s, mid, left);
         groups.insert(g + 1, (mid, e, right));
     }
@@ -512,13 +510,13 @@ fn build_subtree(
     // Build the children; big ones in parallel (each into its own node list, appended after).
     let mut children: Vec<Built> = Vec::with_capacity(WIDTH);
     let big = items.len() >= PARALLEL_ITEMS;
-    let mut slices: Vec<(usize, &mut [BuildItem])> = Vec::with_capacity(WIDTH);
+    let mut slices: Vec<(usize, Box32, &mut [BuildItem])> = Vec::with_capacity(WIDTH);
     let mut rest: &mut [BuildItem] = items;
     let mut consumed = 0;
-    for &(s, e, _) in &groups {
+    for &(s, e, b) in &groups {
         let (head, tail) = std::mem::take(&mut rest).split_at_mut(e - consumed);
         debug_assert_eq!(s, consumed);
-        slices.push((offset + s, head));
+        slices.push((offset + s, b, head));
         rest = tail;
         consumed = e;
     }
@@ -526,9 +524,9 @@ fn build_subtree(
         use rayon::prelude::*;
         let parts: Vec<(Built, Vec<Node>)> = slices
             .into_par_iter()
-            .map(|(off, slice)| {
+            .map(|(off, b, slice)| {
                 let mut local = Vec::new();
-                let built = build_subtree(slice, off, &mut local, params);
+                let built = build_subtree(slice, off, b, &mut local, params);
                 (built, local)
             })
             .collect();
@@ -544,8 +542,8 @@ fn build_subtree(
             children.push(Built { bounds: built.bounds, reference: shift(built.reference) });
         }
     } else {
-        for (off, slice) in slices {
-            children.push(build_subtree(slice, off, nodes, params));
+        for (off, b, slice) in slices {
+            children.push(build_subtree(slice, off, b, nodes, params));
         }
     }
     let node = &mut nodes[node_index];
@@ -559,97 +557,169 @@ fn build_subtree(
     Built { bounds, reference: node_index as u32 }
 }
 
-/// Whether splitting a group that fits in a leaf beats keeping it whole (by the SAH).
-fn worth_splitting(items: &[BuildItem], bounds: &Box32, params: BuildParams) -> bool {
-    if items.len() <= 1 {
-        return false;
-    }
-    match sah_split(items, bounds, params) {
-        Some((cost, _, _)) => cost < leaf_cost(items.len(), params),
-        None => false,
-    }
-}
-
 /// The SAH cost of a leaf of `n` items, relative to the box's area.
 fn leaf_cost(n: usize, params: BuildParams) -> f32 {
     let g = params.leaf_granularity.max(1);
     (n.div_ceil(g) * g) as f32 * params.item_cost
 }
 
-/// The best binned SAH split of `items`: `(cost relative to the box's area, axis, bin)`, the
-/// items of bins `0..=bin` going left.
-fn sah_split(items: &[BuildItem], bounds: &Box32, params: BuildParams) -> Option<(f32, usize, usize)> {
-    let cb = items.iter().fold(Box32::EMPTY, |b, it| b.include(it.centre));
+/// The best binned SAH split found: its cost relative to the box's area, the axis, the last bin
+/// of the left part, and the boxes of both parts.
+#[derive(Clone, Copy)]
+struct Split {
+    cost: f32,
+    axis: usize,
+    bin: usize,
+    centroid_lo: f32,
+    scale: f32,
+    left: Box32,
+    right: Box32,
+}
+
+impl Split {
+    #[inline]
+    fn goes_left(&self, it: &BuildItem) -> bool {
+        (((it.centre[self.axis] - self.centroid_lo) * self.scale) as usize).min(BINS - 1) <= self.bin
+    }
+}
+
+/// Item boxes and counts per bin, on each axis.
+#[derive(Clone, Copy)]
+struct Bins {
+    boxes: [[Box32; BINS]; 3],
+    counts: [[u32; BINS]; 3],
+}
+
+impl Bins {
+    /// Bins `items` on all three axes in one pass, the centroid box being `lo + [0, BINS) / scale`.
+    fn of(items: &[BuildItem], lo: [f32; 3], scale: [f32; 3]) -> Bins {
+        if items.len() >= PARALLEL_ITEMS {
+            use rayon::prelude::*;
+            return items
+                .par_chunks(PARALLEL_ITEMS / 4)
+                .map(|c| Bins::of(c, lo, scale))
+                .reduce_with(Bins::merge)
+                .unwrap_or_else(Bins::empty);
+        }
+        let mut bins = Bins::empty();
+        for it in items {
+            for axis in 0..3 {
+                let b = (((it.centre[axis] - lo[axis]) * scale[axis]) as usize).min(BINS - 1);
+                bins.boxes[axis][b] = bins.boxes[axis][b].union(it.bounds);
+                bins.counts[axis][b] += 1;
+            }
+        }
+        bins
+    }
+
+    fn empty() -> Bins {
+        Bins { boxes: [[Box32::EMPTY; BINS]; 3], counts: [[0; BINS]; 3] }
+    }
+
+    fn merge(mut self, o: Bins) -> Bins {
+        for axis in 0..3 {
+            for b in 0..BINS {
+                self.boxes[axis][b] = self.boxes[axis][b].union(o.boxes[axis][b]);
+                self.counts[axis][b] += o.counts[axis][b];
+            }
+        }
+        self
+    }
+}
+
+/// The box around the items' centres (doubled, as [`Box32::centre2`] keeps them).
+fn centroid_bounds(items: &[BuildItem]) -> Box32 {
+    if items.len() >= PARALLEL_ITEMS {
+        use rayon::prelude::*;
+        return items
+            .par_chunks(PARALLEL_ITEMS / 4)
+            .map(centroid_bounds)
+            .reduce_with(Box32::union)
+            .unwrap_or(Box32::EMPTY);
+    }
+    items.iter().fold(Box32::EMPTY, |b, it| b.include(it.centre))
+}
+
+/// The best binned SAH split of `items` over all three axes, if the items' centres are not all
+/// in one place.
+fn sah_split(items: &[BuildItem], bounds: &Box32, params: BuildParams) -> Option<Split> {
+    let cb = centroid_bounds(items);
     let area = bounds.half_area().max(f32::MIN_POSITIVE);
-    let mut best: Option<(f32, usize, usize)> = None;
-    for axis in 0..3 {
-        let (lo, hi) = (cb.lo[axis], cb.hi[axis]);
-        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+    let scale: [f32; 3] = std::array::from_fn(|axis| {
+        let extent = cb.hi[axis] - cb.lo[axis];
+        if extent > 0.0 { BINS as f32 / extent } else { 0.0 }
+    });
+    if scale.iter().all(|&s| s == 0.0 || !s.is_finite()) {
+        return None;
+    }
+    let bins = Bins::of(items, cb.lo, scale);
+    let mut best: Option<Split> = None;
+    for (axis, &axis_scale) in scale.iter().enumerate() {
+        if axis_scale == 0.0 || !axis_scale.is_finite() {
             continue;
         }
-        let scale = BINS as f32 / (hi - lo);
-        let mut bin_box = [Box32::EMPTY; BINS];
-        let mut bin_count = [0usize; BINS];
-        for it in items {
-            let b = (((it.centre[axis] - lo) * scale) as usize).min(BINS - 1);
-            bin_box[b] = bin_box[b].union(it.bounds);
-            bin_count[b] += 1;
-        }
+        let (boxes, counts) = (&bins.boxes[axis], &bins.counts[axis]);
         // Sweep from the right, then from the left.
-        let mut right_area = [0.0f32; BINS];
-        let mut acc = Box32::EMPTY;
+        let mut right_box = [Box32::EMPTY; BINS];
         let mut right_n = [0usize; BINS];
-        let mut n = 0;
+        let (mut acc, mut n) = (Box32::EMPTY, 0);
         for b in (1..BINS).rev() {
-            acc = acc.union(bin_box[b]);
-            n += bin_count[b];
-            right_area[b] = acc.half_area();
+            acc = acc.union(boxes[b]);
+            n += counts[b] as usize;
+            right_box[b] = acc;
             right_n[b] = n;
         }
-        let mut acc = Box32::EMPTY;
-        let mut n = 0;
+        let (mut acc, mut n) = (Box32::EMPTY, 0);
         for b in 0..BINS - 1 {
-            acc = acc.union(bin_box[b]);
-            n += bin_count[b];
+            acc = acc.union(boxes[b]);
+            n += counts[b] as usize;
             let nr = right_n[b + 1];
             if n == 0 || nr == 0 {
                 continue;
             }
             let cost = NODE_COST
-                + (leaf_cost(n, params) * acc.half_area() + leaf_cost(nr, params) * right_area[b + 1]) / area;
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, b));
+                + (leaf_cost(n, params) * acc.half_area()
+                    + leaf_cost(nr, params) * right_box[b + 1].half_area())
+                    / area;
+            if best.is_none_or(|s| cost < s.cost) {
+                best = Some(Split {
+                    cost,
+                    axis,
+                    bin: b,
+                    centroid_lo: cb.lo[axis],
+                    scale: axis_scale,
+                    left: acc,
+                    right: right_box[b + 1],
+                });
             }
         }
     }
     best
 }
 
-/// Splits `items` in two (reordering them); returns the size of the first part, in `1..len`.
-fn split(items: &mut [BuildItem], params: BuildParams) -> usize {
-    let bounds = items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+/// Splits `items` (with box `bounds`) in two, reordering them; returns the size of the first
+/// part, in `1..len`, and the boxes of both parts.
+fn split(items: &mut [BuildItem], bounds: &Box32, params: BuildParams) -> (usize, Box32, Box32) {
     let n = items.len();
-    if let Some((_, axis, bin)) = sah_split(items, &bounds, params) {
-        let cb = items.iter().fold(Box32::EMPTY, |b, it| b.include(it.centre));
-        let (lo, hi) = (cb.lo[axis], cb.hi[axis]);
-        let scale = BINS as f32 / (hi - lo);
+    if let Some(best) = sah_split(items, bounds, params) {
         let mut first = 0;
         for i in 0..n {
-            let b = (((items[i].centre[axis] - lo) * scale) as usize).min(BINS - 1);
-            if b <= bin {
+            if best.goes_left(&items[i]) {
                 items.swap(first, i);
                 first += 1;
             }
         }
         if first > 0 && first < n {
-            return first;
+            return (first, best.left, best.right);
         }
     }
     // All centroids coincide (or binning could not separate them): split in the middle of the
     // longest axis's order.
-    let cb = items.iter().fold(Box32::EMPTY, |b, it| b.include(it.centre));
+    let cb = centroid_bounds(items);
     let axis = (0..3).max_by(|&a, &b| (cb.hi[a] - cb.lo[a]).total_cmp(&(cb.hi[b] - cb.lo[b]))).unwrap_or(0);
     let mid = n / 2;
     items.select_nth_unstable_by(mid, |a, b| a.centre[axis].total_cmp(&b.centre[axis]));
-    mid
+    let left = items[..mid].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+    let right = items[mid..].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+    (mid, left, right)
 }

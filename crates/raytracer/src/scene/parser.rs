@@ -120,9 +120,9 @@ impl Token<'_> {
     }
 }
 
-/// Splits a line into tokens, dropping the comment (from the first `#` or `//`).
-fn tokenize(line: &str) -> Vec<Token<'_>> {
-    let mut tokens = Vec::new();
+/// Splits a line into `tokens` (cleared first), dropping the comment (from the first `#` or `//`).
+fn tokenize<'a>(line: &'a str, tokens: &mut Vec<Token<'a>>) {
+    tokens.clear();
     let mut start: Option<(usize, u32)> = None;
     let mut column = 0u32;
     let mut chars = line.char_indices().peekable();
@@ -146,7 +146,6 @@ fn tokenize(line: &str) -> Vec<Token<'_>> {
         let text = &line[s..end_of_code];
         tokens.push(Token { text, column: c, len: text.chars().count() as u32 });
     }
-    tokens
 }
 
 /// The kinds of block.
@@ -237,16 +236,55 @@ const IGNORED_PRIMITIVES: [&str; 2] = ["torus", "cube"];
 /// The key a `primitive bezier` block repeats, one control point a line (`P= z r`).
 const BEZIER_POINT_KEY: &str = "P";
 
-/// One `key= values` line of a block.
+/// One `key= values` line of a block, borrowing the file's text.
 #[derive(Clone, Debug)]
-struct Entry {
-    key: String,
+struct Entry<'s> {
+    key: &'s str,
     key_span: Span,
     /// The value tokens (the text after `=` when glued to the key counts as the first).
-    values: Vec<(String, Span)>,
+    values: Values<'s>,
 }
 
-impl Entry {
+/// The values of a key line: up to four inline (a scene of a million spheres allocates nothing
+/// per line), more on the heap.
+#[derive(Clone, Debug)]
+enum Values<'s> {
+    Inline([(&'s str, Span); 4], u8),
+    Heap(Vec<(&'s str, Span)>),
+}
+
+impl<'s> Values<'s> {
+    fn new() -> Values<'s> {
+        Values::Inline([("", Span { line: 0, column: 0, len: 0 }); 4], 0)
+    }
+
+    fn push(&mut self, v: (&'s str, Span)) {
+        match self {
+            Values::Inline(items, n) if (*n as usize) < items.len() => {
+                items[*n as usize] = v;
+                *n += 1;
+            }
+            Values::Inline(items, _) => {
+                let mut heap = items.to_vec();
+                heap.push(v);
+                *self = Values::Heap(heap);
+            }
+            Values::Heap(h) => h.push(v),
+        }
+    }
+}
+
+impl<'s> std::ops::Deref for Values<'s> {
+    type Target = [(&'s str, Span)];
+    fn deref(&self) -> &Self::Target {
+        match self {
+            Values::Inline(items, n) => &items[..*n as usize],
+            Values::Heap(h) => h,
+        }
+    }
+}
+
+impl Entry<'_> {
     /// The span of all values, or of the key when there are none.
     fn values_span(&self) -> Span {
         match (self.values.first(), self.values.last()) {
@@ -258,17 +296,18 @@ impl Entry {
     }
 }
 
-/// A block being read: its kind, header position and key lines.
-struct OpenBlock {
+/// A block being read: its kind, header position and key lines (the last of each key, and every
+/// `P=` line of a Bezier block).
+struct OpenBlock<'s> {
     kind: BlockKind,
     header: Span,
-    entries: Vec<Entry>,
+    entries: Vec<Entry<'s>>,
 }
 
 /// Parser state between lines.
-enum State {
+enum State<'s> {
     TopLevel,
-    InBlock(OpenBlock),
+    InBlock(OpenBlock<'s>),
     /// Skipping an unknown block up to its `end`; the span of its header.
     Skipping(Span),
 }
@@ -323,8 +362,9 @@ impl<'s> Parser<'s> {
     fn run(&mut self) {
         let mut state = State::TopLevel;
         let source = self.source;
+        let mut tokens = Vec::new();
         for (number, line) in source.lines() {
-            let tokens = tokenize(line);
+            tokenize(line, &mut tokens);
             let Some(first) = tokens.first() else { continue };
             state = match state {
                 State::TopLevel => self.top_level_line(number, &tokens),
@@ -378,7 +418,7 @@ impl<'s> Parser<'s> {
     }
 
     /// Handles a line outside any block; returns the state after it.
-    fn top_level_line(&mut self, line: u32, tokens: &[Token<'_>]) -> State {
+    fn top_level_line(&mut self, line: u32, tokens: &[Token<'s>]) -> State<'s> {
         let first = tokens[0];
         let span = first.span(line);
         let start =
@@ -450,7 +490,7 @@ impl<'s> Parser<'s> {
     }
 
     /// Reads a `key= values` line into the open block.
-    fn key_line(&mut self, line: u32, tokens: &[Token<'_>], block: &mut OpenBlock) {
+    fn key_line(&mut self, line: u32, tokens: &[Token<'s>], block: &mut OpenBlock<'s>) {
         let first = tokens[0];
         let (key, key_len, glued, rest) = match first.text.split_once('=') {
             Some((key, after)) => (key, key.chars().count() as u32 + 1, after, &tokens[1..]),
@@ -478,25 +518,31 @@ impl<'s> Parser<'s> {
             self.error(key_span, "a key is missing before `=`");
             return;
         }
-        let mut values = Vec::with_capacity(rest.len() + 1);
+        let mut values = Values::new();
         if !glued.is_empty() {
             let column = first.column + key_len;
-            values.push((glued.to_owned(), Span { line, column, len: glued.chars().count() as u32 }));
+            values.push((glued, Span { line, column, len: glued.chars().count() as u32 }));
         }
-        values.extend(rest.iter().map(|t| (t.text.to_owned(), t.span(line))));
+        for t in rest {
+            values.push((t.text, t.span(line)));
+        }
         let repeatable = block.kind == BlockKind::Primitive(PrimitiveKind::Bezier) && key == BEZIER_POINT_KEY;
-        if let Some(previous) = block.entries.iter().find(|e| e.key == key).filter(|_| !repeatable) {
-            let earlier = previous.key_span.line;
-            self.warning(
-                key_span,
-                format!("`{key}=` is given again; this value replaces the one on line {earlier}"),
-            );
+        let entry = Entry { key, key_span, values };
+        match block.entries.iter().position(|e| e.key == key).filter(|_| !repeatable) {
+            Some(previous) => {
+                let earlier = block.entries[previous].key_span.line;
+                self.warning(
+                    key_span,
+                    format!("`{key}=` is given again; this value replaces the one on line {earlier}"),
+                );
+                block.entries[previous] = entry;
+            }
+            None => block.entries.push(entry),
         }
-        block.entries.push(Entry { key: key.to_owned(), key_span, values });
     }
 
     /// Turns a complete block into scene data.
-    fn finish_block(&mut self, block: OpenBlock) {
+    fn finish_block(&mut self, block: OpenBlock<'s>) {
         let mut reader = BlockReader::new(block, self);
         match reader.kind {
             BlockKind::Background => reader.background(),
@@ -524,38 +570,43 @@ type Lookup<T> = Result<Option<T>, Reported>;
 struct BlockReader<'p, 's> {
     kind: BlockKind,
     header: Span,
-    /// The last entry of each key (later lines win).
-    entries: HashMap<String, Entry>,
+    /// The last entry of each key (later lines win), in file order of their first line.
+    entries: Vec<Entry<'s>>,
+    /// Whether each entry was read.
+    used: Vec<bool>,
     /// The control points of a `primitive bezier` block (`P=` lines), in file order.
-    points: Vec<Entry>,
-    used: Vec<String>,
+    points: Vec<Entry<'s>>,
     parser: &'p mut Parser<'s>,
 }
 
 impl<'p, 's> BlockReader<'p, 's> {
-    fn new(block: OpenBlock, parser: &'p mut Parser<'s>) -> Self {
-        let mut entries = HashMap::new();
-        let mut points = Vec::new();
+    fn new(block: OpenBlock<'s>, parser: &'p mut Parser<'s>) -> Self {
         let bezier = block.kind == BlockKind::Primitive(PrimitiveKind::Bezier);
-        for e in block.entries {
-            if bezier && e.key == BEZIER_POINT_KEY {
-                points.push(e);
-            } else {
-                entries.insert(e.key.clone(), e);
-            }
-        }
-        BlockReader { kind: block.kind, header: block.header, entries, points, used: Vec::new(), parser }
+        let (points, entries): (Vec<Entry<'s>>, Vec<Entry<'s>>) =
+            block.entries.into_iter().partition(|e| bezier && e.key == BEZIER_POINT_KEY);
+        let used = vec![false; entries.len()];
+        BlockReader { kind: block.kind, header: block.header, entries, used, points, parser }
+    }
+
+    /// The entry of `key`, if the block has one.
+    fn find(&self, key: &str) -> Option<&Entry<'s>> {
+        self.entries.iter().find(|e| e.key == key)
+    }
+
+    /// Whether the block sets `key=`.
+    fn has(&self, key: &str) -> bool {
+        self.find(key).is_some()
     }
 
     /// The entry of `key`, marked as used.
-    fn entry(&mut self, key: &str) -> Option<Entry> {
-        let e = self.entries.get(key)?.clone();
-        self.used.push(key.to_owned());
-        Some(e)
+    fn entry(&mut self, key: &str) -> Option<Entry<'s>> {
+        let i = self.entries.iter().position(|e| e.key == key)?;
+        self.used[i] = true;
+        Some(self.entries[i].clone())
     }
 
     fn span_of(&self, key: &str) -> Span {
-        self.entries.get(key).map_or(self.header, Entry::values_span)
+        self.find(key).map_or(self.header, Entry::values_span)
     }
 
     fn error(&mut self, span: Span, message: impl Into<String>) -> &mut Diagnostic {
@@ -582,7 +633,7 @@ impl<'p, 's> BlockReader<'p, 's> {
         }
         let mut out = Vec::with_capacity(n);
         let mut bad = false;
-        for (text, span) in &entry.values {
+        for (text, span) in entry.values.iter() {
             match text.parse::<f64>() {
                 Ok(v) if v.is_finite() => out.push(v),
                 Ok(_) => {
@@ -798,10 +849,8 @@ impl<'p, 's> BlockReader<'p, 's> {
     /// The photon-mapping keys of the camera block, validated (spec section 10).
     fn photon_settings(&mut self) -> PhotonSettings {
         let mut photons = PhotonSettings::default();
-        let mut keys: Vec<(&'static str, Span)> = PhotonSettings::KEYS
-            .iter()
-            .filter_map(|&k| self.entries.get(k).map(|e| (k, e.key_span)))
-            .collect();
+        let mut keys: Vec<(&'static str, Span)> =
+            PhotonSettings::KEYS.iter().filter_map(|&k| self.find(k).map(|e| (k, e.key_span))).collect();
         keys.sort_by_key(|(_, span)| (span.line, span.column));
         photons.keys = keys.into_iter().map(|(k, span)| (k, self.parser.source.location(span))).collect();
         for (key, slot, max) in [
@@ -1022,8 +1071,8 @@ impl<'p, 's> BlockReader<'p, 's> {
 
     /// `primitive triangle`: corners `P0= P1= P2=`, or `O1= O2= O3=`.
     fn triangle(&mut self) -> Option<Shape> {
-        let form = if ["O1", "O2", "O3"].iter().any(|k| self.entries.contains_key(*k))
-            && !["P0", "P1", "P2"].iter().any(|k| self.entries.contains_key(*k))
+        let form = if ["O1", "O2", "O3"].iter().any(|k| self.has(k))
+            && !["P0", "P1", "P2"].iter().any(|k| self.has(k))
         {
             ["O1", "O2", "O3"]
         } else {
@@ -1101,7 +1150,7 @@ impl<'p, 's> BlockReader<'p, 's> {
 
     /// A vector of 3 numbers, or 1 number for all three components.
     fn numbers_1_or_3(&mut self, key: &str) -> Lookup<DVec3> {
-        match self.entries.get(key).map(|e| e.values.len()) {
+        match self.find(key).map(|e| e.values.len()) {
             Some(1) => Ok(self.number(key)?.map(DVec3::splat)),
             _ => self.vec3(key),
         }
@@ -1110,7 +1159,7 @@ impl<'p, 's> BlockReader<'p, 's> {
     /// `primitive bezier`: axis `O1=` to `O2=` with profile points `P= z r` (one a line), or
     /// `center=` with `V0= .. V3=` (abcbdf's form: a cubic about the vertical through `center`).
     fn bezier(&mut self) -> Option<Shape> {
-        if self.entries.contains_key("center") {
+        if self.has("center") {
             let center = self.required_vec3("center", "the point the vertical axis passes through");
             let v = ["V0", "V1", "V2", "V3"].map(|k| self.required_vec3(k, "a control point of the cubic"));
             let center = center?;
@@ -1129,7 +1178,7 @@ impl<'p, 's> BlockReader<'p, 's> {
         let mut bad = false;
         for e in &points {
             let mut values = Vec::with_capacity(2);
-            for (text, span) in &e.values {
+            for (text, span) in e.values.iter() {
                 match text.parse::<f64>() {
                     Ok(v) if v.is_finite() => values.push(v),
                     _ => {
@@ -1145,9 +1194,6 @@ impl<'p, 's> BlockReader<'p, 's> {
                 self.error(e.values_span(), format!("`P=` expects 2 numbers (z r), found {found}"));
                 bad = true;
             }
-        }
-        if !points.is_empty() {
-            self.used.push(BEZIER_POINT_KEY.to_owned());
         }
         let (o1, o2) = (o1?, o2?);
         if bad {
@@ -1182,12 +1228,13 @@ impl<'p, 's> BlockReader<'p, 's> {
     /// Warns about keys the block does not know.
     fn finish(self) {
         let BlockReader { kind, entries, used, parser, .. } = self;
-        let mut unknown: Vec<&Entry> = entries.values().filter(|e| !used.contains(&e.key)).collect();
+        let mut unknown: Vec<&Entry> =
+            entries.iter().zip(&used).filter(|(_, u)| !**u).map(|(e, _)| e).collect();
         unknown.sort_by_key(|e| (e.key_span.line, e.key_span.column));
         for e in unknown {
             let known = known_keys(kind);
             let d = parser.warning(e.key_span, format!("unknown key `{}=` in `{kind}`; ignored", e.key));
-            if let Some(k) = known.iter().find(|k| k.eq_ignore_ascii_case(&e.key)) {
+            if let Some(k) = known.iter().find(|k| k.eq_ignore_ascii_case(e.key)) {
                 d.notes.push(format!("did you mean `{k}=`? keys are case-sensitive"));
             } else {
                 d.notes.push(format!(
