@@ -172,7 +172,14 @@ fn sphere_scene(n: usize, seed: u64) -> String {
 fn displaced_sphere(k: usize, seed: u64) -> (String, usize) {
     let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
     let waves: Vec<(f64, f64, f64, f64)> = (0..6)
-        .map(|i| (rng.uniform() * 6.28, rng.uniform() * 6.28, 2.0 + i as f64 * 1.7, 0.05 / (1.0 + i as f64)))
+        .map(|i| {
+            (
+                rng.uniform() * std::f64::consts::TAU,
+                rng.uniform() * std::f64::consts::TAU,
+                2.0 + i as f64 * 1.7,
+                0.05 / (1.0 + i as f64),
+            )
+        })
         .collect();
     let height = |x: f64, y: f64, z: f64| {
         1.0 + waves
