@@ -4,8 +4,8 @@
 //! - **Spheres**: scenes of 10, 10,000 and 1,000,000 spheres (generated from a seed, in the same
 //!   box in front of the camera, radii shrinking with the count so the picture stays about as
 //!   full), rendered at 640x380 with one sample a pixel: the same number of camera rays whatever
-//!   the count. Prints the time to load (parse and prepare) each scene, the bytes it takes per
-//!   sphere (resident memory before and after loading), and the render time and its ratio to
+//!   the count. Prints the time to load (parse and prepare) each scene, the bytes its geometry
+//!   takes per sphere ([`PreparedScene::geometry_memory`]), and the render time and its ratio to
 //!   the 10-sphere render.
 //! - **Triangles**: a sphere subdivided into about 1,000 and about 1,000,000 triangles and
 //!   displaced by noise (from a seed), written as OBJ files and loaded as `primitive mesh` over a
@@ -44,11 +44,10 @@ fn spheres(runs: usize) {
     let mut base = None;
     for n in [10usize, 10_000, 1_000_000] {
         let text = sphere_scene(n, 7);
-        let rss_before = resident_bytes();
         let started = Instant::now();
         let prepared = load_text(&format!("{n}-spheres.txt"), text, None);
         let load = started.elapsed().as_secs_f64();
-        let per_sphere = resident_bytes().saturating_sub(rss_before) as f64 / n as f64;
+        let per_sphere = prepared.geometry_memory() as f64 / n as f64;
         let settings = RenderSettings {
             width: 640,
             height: 380,
@@ -224,12 +223,4 @@ fn displaced_sphere(k: usize, seed: u64) -> (String, usize) {
         }
     }
     (obj, count)
-}
-
-/// Resident memory of this process, in bytes (Linux; 0 elsewhere).
-fn resident_bytes() -> u64 {
-    std::fs::read_to_string("/proc/self/statm")
-        .ok()
-        .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
-        .map_or(0, |pages| pages * 4096)
 }

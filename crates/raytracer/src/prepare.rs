@@ -218,9 +218,27 @@ impl PreparedScene {
         stats
     }
 
-    /// Bytes the scene-level BVH takes.
-    pub fn bvh_memory(&self) -> usize {
-        self.bvh.memory() + self.bvh_primitives.len() * 4
+    /// Bytes the scene's geometry takes once prepared: the primitives (not their shared materials
+    /// or textures), the per-primitive tables, the scene's BVH and the meshes.
+    pub fn geometry_memory(&self) -> usize {
+        let boxed: usize = self
+            .scene
+            .primitives
+            .iter()
+            .map(|p| match &p.shape {
+                Shape::Square(_) => std::mem::size_of::<Square>(),
+                Shape::Cylinder(_) => std::mem::size_of::<Cylinder>(),
+                Shape::Triangle(_) => std::mem::size_of::<crate::geometry::Triangle>(),
+                Shape::Bezier(_) => std::mem::size_of::<crate::geometry::Bezier>(),
+                _ => 0,
+            })
+            .sum();
+        self.scene.primitives.capacity() * std::mem::size_of::<Primitive>()
+            + boxed
+            + self.texture_of.capacity() * std::mem::size_of::<[u32; 2]>()
+            + self.bvh.memory()
+            + self.bvh_primitives.capacity() * 4
+            + self.mesh_stats().bytes
     }
 
     /// The nearest primitive or light shape along the ray.

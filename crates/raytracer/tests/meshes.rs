@@ -4,6 +4,7 @@
 
 mod support;
 
+use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
 use raytracer::geometry::Shape;
@@ -45,16 +46,16 @@ fn covered(scene: &PreparedScene, model: Model) -> f64 {
 fn the_course_meshes_load_and_render() {
     let Some(assets) = support::course_assets() else { return };
     let meshes = assets.join("meshes");
-    // (file, scale, height): all are y-up (turned z-up by the rotation); the dragon's and
-    // Lucy's coordinates are in the hundreds.
-    for (file, scale, z, triangles) in [
-        ("bunny.obj", 1.6, 0.0, 70_580),
-        ("dragon2.obj", 0.0012, -0.55, 18_259),
-        ("lucy3_tris_smooth.obj", 0.0035, -0.55, 33_446),
-        ("teapot.obj", 0.25, -0.4, 6_320),
+    // (file, scale, height, rotation about x): the bunny is z-up, the others y-up (turned z-up);
+    // the dragon's and Lucy's coordinates are in the hundreds.
+    for (file, scale, z, rx, triangles) in [
+        ("bunny.obj", 1.6, 0.0, 0.0, 70_580),
+        ("dragon2.obj", 0.0012, -0.55, FRAC_PI_2, 18_259),
+        ("lucy3_tris_smooth.obj", 0.0035, -0.55, FRAC_PI_2, 33_446),
+        ("teapot.obj", 0.25, -0.4, FRAC_PI_2, 6_320),
     ] {
         let text = format!(
-            "{VIEW}primitive mesh\n file= {file}\n O= 0 0 {z}\n scale= {scale} {scale} {scale}\n rotation= 1.5708 0 0\n \
+            "{VIEW}primitive mesh\n file= {file}\n O= 0 0 {z}\n scale= {scale} {scale} {scale}\n rotation= {rx} 0 0\n \
              color= 0.8 0.6 0.4\n diff= 0.8\nend\n"
         );
         let scene = prepare(&text, &meshes).unwrap_or_else(|d| panic!("{file}: {d:?}"));

@@ -22,6 +22,8 @@ use glam::{DVec2, DVec3};
 use super::{Bounds, Ray, ShapeHit, ShapePart, course_perpendicular};
 use crate::error::GeometryError;
 
+/// Pieces tested together behind their common hull.
+const GROUP: usize = 4;
 /// Pieces the curve is split into up front, per degree.
 const PIECES_PER_DEGREE: usize = 8;
 /// Deepest further split of a piece, while looking for a root.
@@ -86,6 +88,9 @@ pub struct Bezier {
     /// The derivative in the power basis.
     power_derivative: Vec<DVec2>,
     pieces: Vec<Piece>,
+    /// Runs of [`GROUP`] consecutive pieces with the union of their hulls, tested before the
+    /// pieces in them.
+    groups: Vec<(usize, usize, [f64; 4])>,
     /// The hull of the whole profile, as a piece's.
     hull: [f64; 4],
     bounds: Bounds,
@@ -145,7 +150,21 @@ impl Bezier {
             return Err(GeometryError::Degenerate("the profile is not finite"));
         }
         let hull = Piece::new(0.0, 1.0, profile.clone()).hull;
+        let groups = (0..pieces.len())
+            .step_by(GROUP)
+            .map(|start| {
+                let end = (start + GROUP).min(pieces.len());
+                let h = pieces[start..end].iter().fold(
+                    [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY],
+                    |a, p| {
+                        [a[0].min(p.hull[0]), a[1].max(p.hull[1]), a[2].min(p.hull[2]), a[3].max(p.hull[3])]
+                    },
+                );
+                (start, end, h)
+            })
+            .collect();
         Ok(Bezier {
+            groups,
             base,
             axis,
             profile,
@@ -192,8 +211,16 @@ impl Bezier {
         if eq.annulus_intervals(z0 - pad, z1 + pad, 0.0, r1 + pad, t_min, limit).is_empty() {
             return None;
         }
-        for piece in &self.pieces {
-            self.search(piece, &eq, t_min, &mut limit, pad, 0, &mut best);
+        for &(start, end, [z0, z1, r0, r1]) in &self.groups {
+            if eq
+                .annulus_intervals(z0 - pad, z1 + pad, (r0 - pad).max(0.0), r1 + pad, t_min, limit)
+                .is_empty()
+            {
+                continue;
+            }
+            for piece in &self.pieces[start..end] {
+                self.search(piece, &eq, t_min, &mut limit, pad, 0, &mut best);
+            }
         }
         best.map(|(t, s)| ShapeHit { t, part: ShapePart::Profile { s } })
     }
