@@ -118,19 +118,7 @@ impl MeshRay {
     /// are then in units of its length).
     #[inline]
     pub fn from_f32(origin: [f32; 3], dir: [f32; 3]) -> MeshRay {
-        let a = [dir[0].abs(), dir[1].abs(), dir[2].abs()];
-        let kz = if a[0] > a[1] {
-            if a[0] > a[2] { 0 } else { 2 }
-        } else if a[1] > a[2] {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if dir[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let [kx, ky, kz] = super::triangle::axis_permutation(dir.map(f64::from));
         MeshRay {
             boxes: BoxRay::from_f32(origin, dir),
             k: [kx, ky, kz],

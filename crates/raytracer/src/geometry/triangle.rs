@@ -30,19 +30,7 @@ impl WatertightRay {
     #[inline]
     pub fn new(ray: &Ray) -> WatertightRay {
         let d = ray.dir;
-        let a = d.abs();
-        let kz = if a.x > a.y {
-            if a.x > a.z { 0 } else { 2 }
-        } else if a.y > a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let [kx, ky, kz] = axis_permutation([d.x, d.y, d.z]);
         WatertightRay {
             k: [kx, ky, kz],
             shear: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
@@ -80,6 +68,23 @@ impl WatertightRay {
         }
         Some((t, v / det, w / det))
     }
+}
+
+/// The axes `(kx, ky, kz)` of the watertight test's frame for a ray direction `d`: `kz` where `d`
+/// is largest in magnitude, `kx` and `ky` the next two, swapped when `d[kz]` is negative so the
+/// triangles' winding is kept. (Also used by meshes, whose rays are single-precision.)
+#[inline]
+pub fn axis_permutation(d: [f64; 3]) -> [usize; 3] {
+    let a = d.map(f64::abs);
+    let kz = if a[0] > a[1] {
+        if a[0] > a[2] { 0 } else { 2 }
+    } else if a[1] > a[2] {
+        1
+    } else {
+        2
+    };
+    let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if d[kz] < 0.0 { [ky, kx, kz] } else { [kx, ky, kz] }
 }
 
 /// A triangle with corners `p0`, `p1`, `p2` (`P0= P1= P2=` or `O1= O2= O3=`). Both faces are
