@@ -128,6 +128,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         print_diagnostics(&errors);
         fail(&format!("`{}` names textures that cannot be used; nothing was rendered", source.name()))
     })?;
+    print_diagnostics(&prepared.diagnostics);
     let prepare_time = started.elapsed();
 
     let mut settings = RenderSettings::for_scene(&prepared);

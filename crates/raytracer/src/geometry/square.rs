@@ -154,7 +154,7 @@ mod tests {
             let c = DVec3::new(scale, 2.0 * scale, -scale);
             let dx = DVec3::new(1.0, 0.2, 0.0) * scale;
             let dy = DVec3::new(0.0, 0.3, 1.0) * scale;
-            let shape = Shape::Square(Square::new(c, dx, dy).expect("valid"));
+            let shape = Shape::Square(Box::new(Square::new(c, dx, dy).expect("valid")));
             check_reintersection(&shape, c, scale, &mut rng);
         }
     }

@@ -14,6 +14,8 @@ pub use parser::{
 };
 pub use source::{ReadError, SourceFile, Span};
 
+use std::sync::Arc;
+
 use glam::DVec3;
 
 use crate::geometry::Shape;
@@ -224,6 +226,7 @@ impl Default for PhotonSettings {
 pub struct Primitive {
     /// The geometry.
     pub shape: Shape,
-    /// The surface.
-    pub material: Material,
+    /// The surface, shared by every primitive with the same material (the parser shares equal
+    /// untextured materials; a mesh's triangles all share their mesh's).
+    pub material: Arc<Material>,
 }
