@@ -9,7 +9,7 @@ use raytracer::image_io::{OutputFormat, write_image};
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::{Model, choose_model};
 use raytracer::render::{MAX_SPP, Progress, RenderStats, Stage};
-use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, SourceFile};
+use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, MAX_KEPT_DIAGNOSTICS, Omitted, SourceFile};
 use raytracer::{PreparedScene, RenderSettings, Sampling, TextureSearch};
 
 /// The project's showcase scene, rendered when no scene file is given.
@@ -98,11 +98,11 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
     };
     let parsed = scene::parse(&source).map_err(|e| {
-        print_diagnostics(&e.diagnostics);
+        print_diagnostics_with(&e.diagnostics, e.omitted);
         let n = e.error_count();
         fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
     })?;
-    print_diagnostics(&parsed.diagnostics);
+    print_diagnostics_with(&parsed.diagnostics, parsed.omitted);
 
     let search =
         TextureSearch { scene_dir: source.dir().map(Path::to_path_buf), extra_dirs: args.textures.clone() };
@@ -151,11 +151,12 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     if args.check {
         if !args.quiet {
             let scene = &prepared.scene;
+            let (primitives, lights) = (scene.primitives.len(), scene.lights.len());
             println!(
-                "{}: ok ({} primitives, {} lights, {}x{} pixels, {} model)",
+                "{}: ok ({primitives} primitive{}, {lights} light{}, {}x{} pixels, {} model)",
                 source.name(),
-                scene.primitives.len(),
-                scene.lights.len(),
+                plural(primitives),
+                plural(lights),
                 settings.width,
                 settings.height,
                 settings.model.name()
@@ -278,8 +279,35 @@ fn print_photon_summary(p: &PhotonStats) {
 }
 
 fn print_diagnostics(diagnostics: &[Diagnostic]) {
+    print_diagnostics_with(diagnostics, Omitted::default());
+}
+
+/// Prints at most [`MAX_KEPT_DIAGNOSTICS`] errors and as many warnings and notes, then one line
+/// counting the rest (those beyond the cap here and those the parser only counted).
+fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
+    let (mut errors, mut others) = (0, 0);
     for d in diagnostics {
-        eprintln!("{d}");
+        let (shown, more) = if d.is_error() {
+            (&mut errors, &mut omitted.errors)
+        } else {
+            (&mut others, &mut omitted.others)
+        };
+        if *shown < MAX_KEPT_DIAGNOSTICS {
+            *shown += 1;
+            eprintln!("{d}");
+        } else {
+            *more += 1;
+        }
+    }
+    let mut parts = Vec::new();
+    if omitted.errors > 0 {
+        parts.push(format!("{} more error{}", omitted.errors, plural(omitted.errors)));
+    }
+    if omitted.others > 0 {
+        parts.push(format!("{} more warning{} and notes", omitted.others, plural(omitted.others)));
+    }
+    if !parts.is_empty() {
+        eprintln!("... and {}\n", parts.join(" and "));
     }
 }
 

@@ -79,7 +79,7 @@ fn check_validates_without_rendering() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(text(&out.stderr).contains("warning: unknown key `gloss=` in `primitive sphere`; ignored"));
     assert!(
-        text(&out.stdout).contains("scene.txt: ok (3 primitives, 1 lights, 40x30 pixels, classic model)"),
+        text(&out.stdout).contains("scene.txt: ok (3 primitives, 1 light, 40x30 pixels, classic model)"),
         "{}",
         text(&out.stdout)
     );
@@ -88,8 +88,37 @@ fn check_validates_without_rendering() {
     assert!(builtin.status.success(), "{}", text(&builtin.stderr));
     assert!(
         text(&builtin.stdout)
-            .contains("showcase.txt (built in): ok (9 primitives, 1 lights, 1280x760 pixels, classic model)")
+            .contains("showcase.txt (built in): ok (9 primitives, 1 light, 1280x760 pixels, classic model)")
     );
+}
+
+#[test]
+fn thousands_of_errors_print_fifty_and_a_count() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // 100,000 unclosed blocks: 300,000 errors.
+    std::fs::write(dir.path().join("blocks.txt"), "primitive sphere\n".repeat(100_000)).expect("write");
+    let out = rayterra(&["render", "blocks.txt"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert_eq!(stderr.matches("error: the `primitive sphere` block has no `end`").count(), 17, "{stderr}");
+    assert!(stderr.contains("\n... and 299950 more errors\n"), "{stderr}");
+    assert!(stderr.ends_with("error: `blocks.txt` has 300000 errors; nothing was rendered\n"), "{stderr}");
+    assert!(stderr.len() < 20_000, "{} bytes", stderr.len());
+}
+
+#[test]
+fn scene_paths_that_are_not_files_are_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = rayterra(&["render", "."], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("cannot read scene file `.`: it is a directory"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = rayterra(&["render", "/dev/zero", "--check"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("it is not a regular file"), "{}", text(&out.stderr));
 }
 
 #[test]
