@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use raytracer::image_io::{OutputFormat, write_image};
+use raytracer::image_io::{OutputFormat, check_output, write_image};
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::{Model, choose_model};
 use raytracer::render::{MAX_SPP, Progress, RenderStats, Stage};
@@ -93,6 +93,9 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
 /// Runs `rayterra render`.
 pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let started = Instant::now();
+    // A bad output path or format is found before any work, not after the render.
+    let format = if args.check { OutputFormat::from_path(&args.output) } else { check_output(&args.output) }
+        .map_err(|e| fail(&e.to_string()))?;
     let source = match &args.scene {
         Some(path) => SourceFile::read(path).map_err(|e| fail(&e.to_string()))?,
         None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
@@ -143,7 +146,6 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         })?;
     }
     scene::check_image_size(settings.width, settings.height).map_err(|m| fail(&m))?;
-    let format = OutputFormat::from_path(&args.output).map_err(|e| fail(&e.to_string()))?;
     if format.is_linear() && args.gamma {
         eprintln!("warning: --gamma has no effect on linear {format:?} output");
     }

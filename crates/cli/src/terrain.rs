@@ -164,8 +164,8 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         return Err(no_display_message("neither DISPLAY nor WAYLAND_DISPLAY is set"));
     }
     if let Some(out) = &args.screenshot {
-        // Refuse an unwritable format before any work.
-        terrain::output::format_for(out).map_err(|error| error.to_string())?;
+        // Refuse an unwritable format or folder before any work.
+        terrain::output::check_output(out).map_err(|error| error.to_string())?;
     }
     let world = load_world(&args, &config)?;
     if let Some(dir) = &args.export_assets {
