@@ -8,9 +8,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::image_io::{OutputFormat, check_output, write_image};
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::{Model, choose_model};
+use raytracer::memory::parse_byte_size;
 use raytracer::render::{MAX_SPP, Progress, RenderStats, Stage};
 use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, MAX_KEPT_DIAGNOSTICS, Omitted, SourceFile};
-use raytracer::{PreparedScene, RenderSettings, Sampling, TextureSearch};
+use raytracer::{MemoryBudget, PreparedScene, RenderSettings, Sampling, TextureSearch};
 
 /// The project's showcase scene, rendered when no scene file is given.
 const SHOWCASE: &str = include_str!("../../../scenes/showcase.txt");
@@ -68,6 +69,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_EMITTED_PHOTONS))]
     pub photons: Option<u64>,
 
+    /// Most memory the scene's textures and the photon map may take together, e.g. 512M or 8G.
+    #[arg(long, value_name = "SIZE", default_value = "4G", value_parser = parse_byte_size)]
+    pub memory_limit: u64,
+
     /// Parse and validate the scene (textures included) and print the warnings; render nothing.
     #[arg(long)]
     pub check: bool,
@@ -107,12 +112,20 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     })?;
     print_diagnostics_with(&parsed.diagnostics, parsed.omitted);
 
+    for dir in &args.textures {
+        if !dir.is_dir() {
+            let what = if dir.exists() { "is not a folder" } else { "does not exist" };
+            eprintln!("warning: --textures `{}` {what}; no texture is looked for there", dir.display());
+        }
+    }
     let search =
         TextureSearch { scene_dir: source.dir().map(Path::to_path_buf), extra_dirs: args.textures.clone() };
-    let prepared = PreparedScene::new(parsed.scene, &search).map_err(|errors| {
+    let budget = MemoryBudget::new(args.memory_limit);
+    let prepared = PreparedScene::with_budget(parsed.scene, &search, &budget).map_err(|errors| {
         print_diagnostics(&errors);
         fail(&format!("`{}` names textures that cannot be used; nothing was rendered", source.name()))
     })?;
+    print_diagnostics(&prepared.diagnostics);
     let prepare_time = started.elapsed();
 
     let mut settings = RenderSettings::for_scene(&prepared);
@@ -136,14 +149,25 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     print_diagnostics(&notes);
     settings.model = model;
     settings.photons = args.photons;
+    // The photon map gets what the textures left of the memory limit.
+    settings.memory_limit = budget.remaining();
     if args.photons.is_some() && !model.uses_photons() {
         eprintln!("warning: --photons has no effect on the {} model", model.name());
     }
     if model.uses_photons() {
-        photon::check_memory(&settings.photon_settings(&prepared), settings.memory_limit).map_err(|d| {
-            print_diagnostics(&[d]);
-            fail(&format!("`{}` asks for too large a photon map; nothing was rendered", source.name()))
-        })?;
+        photon::check_memory(&settings.photon_settings(&prepared), settings.memory_limit).map_err(
+            |mut d| {
+                if budget.used() > 0 {
+                    d.notes.push(format!(
+                        "the scene's textures take {} of the memory limit of {} (--memory-limit)",
+                        photon::format_bytes(budget.used()),
+                        photon::format_bytes(budget.limit())
+                    ));
+                }
+                print_diagnostics(&[d]);
+                fail(&format!("`{}` asks for too large a photon map; nothing was rendered", source.name()))
+            },
+        )?;
     }
     scene::check_image_size(settings.width, settings.height).map_err(|m| fail(&m))?;
     if format.is_linear() && args.gamma {

@@ -149,6 +149,32 @@ fn missing_texture_is_an_error_at_its_line() {
 }
 
 #[test]
+fn memory_limit_bounds_the_textures_and_missing_texture_folders_are_warned_about() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    image::GrayImage::new(1024, 1024).save(dir.path().join("big.png")).expect("png");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE.replace("builtin:marble", "big.png"))
+        .expect("write");
+    let out = rayterra(&["render", "scene.txt", "--check", "--memory-limit", "6M"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("texture `big.png` (1024x1024 pixels) needs 8.0 MiB"), "{stderr}");
+    assert!(
+        stderr.contains("over the memory limit of 6.0 MiB") && stderr.contains("scene.txt:18:11"),
+        "{stderr}"
+    );
+    let out = rayterra(&["render", "scene.txt", "--check", "--textures", "nowhere"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr)
+            .contains("warning: --textures `nowhere` does not exist; no texture is looked for there"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = rayterra(&["render", "scene.txt", "--check", "--memory-limit", "lots"], dir.path());
+    assert_eq!(out.status.code(), Some(2), "a malformed option");
+}
+
+#[test]
 fn bad_requests_are_refused_without_output() {
     let dir = tempfile::tempdir().expect("temp dir");
     std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");

@@ -263,7 +263,7 @@ mod tests {
     fn long_lines_are_cut_around_the_span() {
         let mut line = "O= ".to_owned();
         line.push_str(&"1 ".repeat(5000));
-        line.push_str("x");
+        line.push('x');
         line.push_str(&" 2".repeat(5000));
         let column = 3 + 10_000 + 1;
         let text = at(&line, column as u32, 1).to_string();
