@@ -216,9 +216,11 @@ impl<W: Seek> Seek for Recording<W> {
     }
 }
 
-/// Runs `encode` on a writer into `w`, and returns the I/O error the writer met (first) or else
-/// the encoder's error.
-fn encode_into<W: Write + Seek, E: std::error::Error + 'static>(
+/// Runs `encode` on a buffered writer into `w` and flushes it; on failure, returns the I/O error
+/// the writer met (the first one) or else the encoder's error, both naming `path`.
+/// [`write_atomically`] encodes through it; it is public so that encoders can be tested against
+/// a failing writer (such as `/dev/full`).
+pub fn encode_into<W: Write + Seek, E: std::error::Error + 'static>(
     w: W,
     path: &Path,
     encode: impl FnOnce(&mut Writer<W>) -> Result<(), E>,

@@ -46,6 +46,9 @@ fn stop_on_interrupt() {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if matches!(cli.command, Command::Terrain(_)) {
+        terrain::quiet_vulkan_device_select();
+    }
     stop_on_interrupt();
     let result = match cli.command {
         Command::Render(args) => render::run(args),

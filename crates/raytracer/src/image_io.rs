@@ -167,6 +167,21 @@ mod tests {
 
     #[cfg(unix)]
     #[test]
+    fn a_full_disk_under_the_exr_encoder_says_so() {
+        // /dev/full fails every write with "No space left on device"; the EXR encoder itself
+        // calls that "Format error decoding OpenExr".
+        let Ok(mut full) = std::fs::File::options().write(true).open("/dev/full") else { return };
+        let big = Image::new(64, 64, vec![[0.5; 3]; 64 * 64]);
+        let err = atomic_file::encode_into(&mut full, Path::new("out.exr"), |w| {
+            big.to_rgb32f().write_to(w, ImageFormat::OpenExr)
+        })
+        .expect_err("disk full")
+        .to_string();
+        assert!(err.starts_with("cannot write `out.exr`: No space left on device"), "{err}");
+    }
+
+    #[cfg(unix)]
+    #[test]
     fn written_files_get_ordinary_permissions() {
         use std::os::unix::fs::PermissionsExt;
         let dir = tempfile::tempdir().expect("temp dir");

@@ -726,26 +726,36 @@ impl<'p, 's> BlockReader<'p, 's> {
                 }
             }
         }
+        // Whether the lens and image sizes all read; the aspect is compared only then (an error
+        // in one of them is not also a stretched picture).
+        let mut sizes_read = true;
         for (key, slot) in [("lens_W", &mut cam.lens_width), ("lens_H", &mut cam.lens_height)] {
-            if let Ok(Some(v)) = self.number(key) {
-                if v > 0.0 {
-                    *slot = v;
-                } else {
+            match self.number(key) {
+                Ok(Some(v)) if v > 0.0 => *slot = v,
+                Ok(Some(_)) => {
                     let span = self.span_of(key);
                     self.error(span, format!("`{key}=` must be positive"));
+                    sizes_read = false;
                 }
+                Ok(None) => {}
+                Err(Reported) => sizes_read = false,
             }
         }
         let side = MAX_IMAGE_SIDE as u64;
-        if let Ok(Some(w)) = self.integer("image_W", 1, side) {
-            cam.image_width = w as u32;
+        match self.integer("image_W", 1, side) {
+            Ok(Some(w)) => cam.image_width = w as u32,
+            Ok(None) => {}
+            Err(Reported) => sizes_read = false,
         }
-        if let Ok(Some(h)) = self.integer("image_H", 1, side) {
-            cam.image_height = h as u32;
+        match self.integer("image_H", 1, side) {
+            Ok(Some(h)) => cam.image_height = h as u32,
+            Ok(None) => {}
+            Err(Reported) => sizes_read = false,
         }
         if let Err(message) = check_image_size(cam.image_width, cam.image_height) {
             let span = self.span_of("image_W");
             self.error(span, message);
+            sizes_read = false;
         }
         let q = MAX_QUALITY as u64;
         if let Ok(Some(v)) = self.integer("shade_quality", 1, q) {
@@ -782,7 +792,8 @@ impl<'p, 's> BlockReader<'p, 's> {
                 self.error(span, "`focal_dist=` must be positive");
             }
         }
-        if let Some(message) = aspect_mismatch(&cam, cam.image_width, cam.image_height) {
+        if let Some(message) = aspect_mismatch(&cam, cam.image_width, cam.image_height).filter(|_| sizes_read)
+        {
             let span = self.span_of("lens_W");
             self.warning(span, message);
         }

@@ -591,6 +591,23 @@ fn invalid_camera_values_are_errors() {
 }
 
 #[test]
+fn a_bad_image_or_lens_size_is_one_error_without_an_aspect_warning() {
+    for text in [
+        "camera\n image_W= 0\n lens_W= 1\n lens_H= 1\nend\n",
+        "camera\n image_H= 3.5\n lens_W= 1\n lens_H= 1\nend\n",
+        "camera\n lens_W= -1\n image_W= 640\n image_H= 380\nend\n",
+        "camera\n lens_H= x\n image_W= 640\n image_H= 380\nend\n",
+    ] {
+        let all = diagnostics(text);
+        assert_eq!(all.len(), 1, "{text}: {all:#?}");
+        assert_eq!(all[0].0, Severity::Error, "{text}");
+    }
+    // A valid but mismatched size still draws the warning.
+    let all = diagnostics("camera\n image_W= 640\n image_H= 380\n lens_W= 1\n lens_H= 1\nend\n");
+    assert!(all[0].3.contains("will be stretched"), "{all:#?}");
+}
+
+#[test]
 fn absurd_image_sizes_are_refused() {
     // Each side is allowed, the area is not.
     let (line, _, message) =

@@ -4,7 +4,7 @@ use std::path::Path;
 
 use image::DynamicImage;
 
-use super::{WorldError, read_image};
+use super::{WorldError, image_size, read_image};
 
 /// Largest heightmap side accepted, in samples. Beyond this the mesh no longer fits the buffers of
 /// common GPUs (and the course maps are 256 wide); it keeps absurd inputs from exhausting memory.
@@ -87,8 +87,12 @@ impl Heightmap {
     }
 
     /// Reads a heightmap from an image file (PNG, BMP, JPEG, ...; the format is recognised from
-    /// the content). Errors name the file.
+    /// the content). The size is checked from the file's header before it is decoded. Errors
+    /// name the file.
     pub fn load(path: &Path) -> Result<Self, WorldError> {
+        let bad = |problem| WorldError::BadHeightmap { path: path.to_path_buf(), problem };
+        let (columns, rows) = image_size(path)?;
+        Self::check_size(columns, rows).map_err(bad)?;
         let image = read_image(path)?;
         Self::from_image(&image)
             .map_err(|problem| WorldError::BadHeightmap { path: path.to_path_buf(), problem })
