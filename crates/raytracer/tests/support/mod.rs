@@ -36,7 +36,7 @@ pub fn course_assets() -> Option<PathBuf> {
     if std::env::var_os("CI").is_some() {
         panic!("{message} (required under CI)");
     }
-    eprintln!("\n**** SKIPPED: {message} ****\n");
+    test_skips::skip("raytracer course-data tests", &message);
     None
 }
 
