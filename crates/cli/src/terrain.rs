@@ -38,8 +38,8 @@ pub struct TerrainArgs {
     #[arg(long, value_name = "DIR", conflicts_with_all = ["heightmap", "seed", "grid"])]
     assets: Option<PathBuf>,
 
-    /// Use this greyscale image (8- or 16-bit PNG, BMP, ...; any size, square or not) as the
-    /// heightmap, with a colour map painted from its heights and the default sky, detail and water.
+    /// Use this greyscale image (8- or 16-bit PNG, BMP, ...; 2 to 8193 pixels a side, square or
+    /// not) as the heightmap, with a colour map painted from its heights and the default sky, detail and water.
     #[arg(long, value_name = "FILE", conflicts_with = "grid")]
     heightmap: Option<PathBuf>,
 
