@@ -161,7 +161,17 @@ pub const MAX_IMAGE_SIDE: u32 = 16_384;
 /// nothing decoded yet.
 fn open_decoder(path: &Path) -> Result<impl image::ImageDecoder, WorldError> {
     let read = |source| WorldError::Read { path: path.to_path_buf(), source };
-    let mut reader = image::ImageReader::open(path).map_err(read)?.with_guessed_format().map_err(read)?;
+    header_decoder(image::ImageReader::open(path).map_err(read)?, path)
+}
+
+/// The decoder of an image read from `reader` (`path` names it in messages), as
+/// [`open_decoder`].
+fn header_decoder<'a, R: std::io::BufRead + std::io::Seek + 'a>(
+    reader: image::ImageReader<R>,
+    path: &Path,
+) -> Result<impl image::ImageDecoder + use<'a, R>, WorldError> {
+    let read = |source| WorldError::Read { path: path.to_path_buf(), source };
+    let mut reader = reader.with_guessed_format().map_err(read)?;
     // The header only: no size limit yet, so that the size can be named in the message.
     let mut limits = image::Limits::no_limits();
     limits.max_alloc = Some(64 << 20);
@@ -178,8 +188,12 @@ pub fn image_size(path: &Path) -> Result<(u32, u32), WorldError> {
 /// the header first (at most [`MAX_IMAGE_SIDE`] a side), and the decoder may allocate no more
 /// than the picture needs. Errors name the file.
 pub fn read_image(path: &Path) -> Result<DynamicImage, WorldError> {
+    decode_checked(open_decoder(path)?, path)
+}
+
+/// Checks the size a decoder's header gives, then decodes behind limits.
+fn decode_checked(mut decoder: impl image::ImageDecoder, path: &Path) -> Result<DynamicImage, WorldError> {
     let decode = |source| WorldError::Decode { path: path.to_path_buf(), source };
-    let mut decoder = open_decoder(path)?;
     let (width, height) = image::ImageDecoder::dimensions(&decoder);
     if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(WorldError::TooLarge { path: path.to_path_buf(), width, height });
