@@ -142,6 +142,16 @@ pub enum TextureError {
         /// Its height in pixels.
         height: u32,
     },
+    /// The image has no pixels (a width or a height of 0).
+    #[error("texture `{}` is an empty image ({width}x{height} pixels)", .path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+    },
     /// Decoding and keeping the image would take the scene past its memory budget.
     #[error("texture `{}` ({width}x{height} pixels) {over}", .path.display())]
     OverBudget {
@@ -200,6 +210,11 @@ fn open_decoder<'a, R: BufRead + Seek + 'a>(
     let (width, height) = image::ImageDecoder::dimensions(&decoder);
     if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
         return Err(TextureError::TooLarge { path: path.to_path_buf(), width, height });
+    }
+    if width == 0 || height == 0 {
+        // Found by fuzzing: a Radiance header may say `-Y 0 +X 8`, and a lookup in an empty
+        // texture has no texel to read.
+        return Err(TextureError::Empty { path: path.to_path_buf(), width, height });
     }
     let decoded = image::ImageDecoder::total_bytes(&decoder);
     let rgb8 = image::ImageDecoder::color_type(&decoder) == image::ColorType::Rgb8;
@@ -419,6 +434,16 @@ mod tests {
         let t = Texture::from_image(img);
         assert_eq!(t.texel(0, 0), [0.5, 255.0 / 256.0, 0.0]);
         assert_eq!(t.sample(0.3, 0.7), DVec3::new(0.5, 255.0 / 256.0, 0.0));
+    }
+
+    #[test]
+    fn empty_images_are_refused() {
+        // A Radiance file 8 pixels wide and 0 high (the fuzzer's first crash: the lookup in the
+        // empty texture underflowed).
+        let hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 8\n";
+        let err = Texture::from_bytes(hdr, "empty.hdr", &MemoryBudget::new(1 << 20)).expect_err("empty");
+        assert!(matches!(err, TextureError::Empty { width: 8, height: 0, .. }), "{err}");
+        assert_eq!(err.to_string(), "texture `empty.hdr` is an empty image (8x0 pixels)");
     }
 
     #[test]

@@ -73,6 +73,16 @@ pub enum WorldError {
         /// Its height in pixels.
         height: u32,
     },
+    /// An image with no pixels (a width or a height of 0).
+    #[error("{} is an empty image ({width}x{height} pixels)", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+    },
     /// The asset path is not a folder.
     #[error("{} is not a folder", path.display())]
     NotAFolder {
@@ -198,6 +208,9 @@ fn decode_checked(mut decoder: impl image::ImageDecoder, path: &Path) -> Result<
     if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         return Err(WorldError::TooLarge { path: path.to_path_buf(), width, height });
     }
+    if width == 0 || height == 0 {
+        return Err(WorldError::Empty { path: path.to_path_buf(), width, height });
+    }
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(width);
     limits.max_image_height = Some(height);
@@ -254,6 +267,15 @@ mod tests {
             error.contains("a heightmap may have at most 8193 samples per side, this one is 20000x20000"),
             "{error}"
         );
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn empty_images_are_refused() {
+        let path = std::env::temp_dir().join(format!("rayterra-empty-{}.hdr", std::process::id()));
+        std::fs::write(&path, b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 8\n").expect("write");
+        let error = read_image(&path).expect_err("empty");
+        assert!(matches!(error, WorldError::Empty { width: 8, height: 0, .. }), "{error}");
         let _ = std::fs::remove_file(&path);
     }
 
