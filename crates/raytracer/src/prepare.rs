@@ -18,9 +18,10 @@ use crate::geometry::{
     Cylinder, MeshFile, Plane, Ray, Shape, ShapeHit, ShapePart, Sphere, Square, TriangleMesh, offset_origin,
 };
 use crate::material::Material;
+use crate::memory::MemoryBudget;
 use crate::procedural;
 use crate::scene::{Diagnostic, Location, Primitive, Scene, Severity};
-use crate::texture::{Texture, TextureError, TextureRef, TextureSource};
+use crate::texture::{ImageInfo, Texture, TextureError, TextureRef, TextureSource, memory_bytes};
 
 /// Scenes with at most this many bounded primitives test them in a loop instead of a BVH.
 pub const FLAT_LIMIT: usize = 8;
@@ -48,23 +49,63 @@ impl TextureSearch {
         dirs
     }
 
-    /// Finds the file a `texture=` (or mesh file) path names.
+    /// Finds the file a `texture=` (or mesh file) path names (see [`TextureSearch::locate`]).
     pub fn resolve(&self, name: &str) -> Result<PathBuf, TextureError> {
-        let path = Path::new(name);
-        if path.is_absolute() {
-            return if path.is_file() {
-                Ok(path.to_path_buf())
-            } else {
-                Err(TextureError::NotFound { name: name.to_owned(), searched: vec![path.to_path_buf()] })
-            };
-        }
-        let searched: Vec<PathBuf> = self.folders().iter().map(|d| d.join(path)).collect();
-        searched
-            .iter()
-            .find(|p| p.is_file())
-            .cloned()
-            .ok_or(TextureError::NotFound { name: name.to_owned(), searched })
+        self.locate(name).map(|found| found.path)
     }
+
+    /// Finds the file a `texture=` path names: in each folder in turn, the path as written; when
+    /// that is nowhere and the path has folders in it, its bare file name in each folder (the
+    /// course's files name textures relative to the course program's own working folder, as in
+    /// `texture= src/floor.bmp`). A folder or a device found under the name is an error of its
+    /// own, not "cannot find".
+    pub fn locate(&self, name: &str) -> Result<Located, TextureError> {
+        let path = Path::new(name);
+        let mut searched = Vec::new();
+        let mut not_a_file = None;
+        let mut try_in = |candidates: Vec<PathBuf>, searched: &mut Vec<PathBuf>| {
+            for candidate in candidates {
+                match std::fs::metadata(&candidate) {
+                    Ok(m) if m.is_file() => return Some(candidate),
+                    Ok(m) => {
+                        not_a_file.get_or_insert((candidate.clone(), m.is_dir()));
+                    }
+                    Err(_) => {}
+                }
+                searched.push(candidate);
+            }
+            None
+        };
+        let as_written = if path.is_absolute() {
+            vec![path.to_path_buf()]
+        } else {
+            self.folders().iter().map(|d| d.join(path)).collect()
+        };
+        if let Some(path) = try_in(as_written, &mut searched) {
+            return Ok(Located { path, by_file_name: false });
+        }
+        let file_name = path.file_name().filter(|f| Path::new(f) != path);
+        if let Some(file_name) = file_name {
+            let by_name = self.folders().iter().map(|d| d.join(file_name)).collect();
+            if let Some(path) = try_in(by_name, &mut searched) {
+                return Ok(Located { path, by_file_name: true });
+            }
+        }
+        Err(match not_a_file {
+            Some((path, true)) => TextureError::Directory { path },
+            Some((path, false)) => TextureError::NotAFile { path },
+            None => TextureError::NotFound { name: name.to_owned(), searched },
+        })
+    }
+}
+
+/// A file found by [`TextureSearch::locate`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Located {
+    /// The file.
+    pub path: PathBuf,
+    /// Whether it was found by its bare file name only, the path as written leading nowhere.
+    pub by_file_name: bool,
 }
 
 /// What a ray hit first.
@@ -97,8 +138,11 @@ pub struct PreparedScene {
     /// The scene as parsed, with its mesh files loaded: each `primitive mesh` or `polyhedron`
     /// became one primitive per material of its file, in its place.
     pub scene: Scene,
-    /// Warnings found while preparing (a mesh's missing material library, for example).
+    /// Notes and warnings found while preparing (a mesh's missing material library, a texture
+    /// found by its file name only).
     pub diagnostics: Vec<Diagnostic>,
+    /// Bytes of the memory budget the scene's textures keep.
+    pub memory_used: u64,
     /// Loaded and generated textures.
     textures: Vec<Texture>,
     /// For each primitive, the indices of its texture and of its normal map ([`NO_TEXTURE`]:
@@ -127,8 +171,21 @@ pub struct MeshStats {
 impl PreparedScene {
     /// Loads the textures the scene names (image files through `search`, built-in ones
     /// generated) and its mesh files (found like textures), and builds the acceleration
-    /// structures. Every unreadable texture or mesh is reported.
-    pub fn new(mut scene: Scene, search: &TextureSearch) -> Result<PreparedScene, Vec<Diagnostic>> {
+    /// structures. Every unreadable texture or mesh is reported. The textures must fit in the
+    /// default memory budget ([`MemoryBudget::default`]).
+    pub fn new(scene: Scene, search: &TextureSearch) -> Result<PreparedScene, Vec<Diagnostic>> {
+        PreparedScene::with_budget(scene, search, &MemoryBudget::default())
+    }
+
+    /// As [`PreparedScene::new`], charging `budget` with the memory the textures keep (and,
+    /// while they decode, the memory decoding takes). Each texture's size is read from its
+    /// header and charged in file order before anything is decoded, so a texture over the budget
+    /// is an error at its line, whatever the thread count.
+    pub fn with_budget(
+        mut scene: Scene,
+        search: &TextureSearch,
+        budget: &MemoryBudget,
+    ) -> Result<PreparedScene, Vec<Diagnostic>> {
         let mut diagnostics = Vec::new();
         let mut errors = Vec::new();
         load_meshes(&mut scene, search, &mut diagnostics, &mut errors);
@@ -150,20 +207,19 @@ impl PreparedScene {
             }
             texture_of.push(pair);
         }
-        let loaded: Vec<Result<Texture, Diagnostic>> = sources
-            .par_iter()
-            .map(|t| load_texture(&t.source, search).map_err(|e| texture_diagnostic(t, e)))
-            .collect();
-        let mut textures = Vec::with_capacity(loaded.len());
-        for r in loaded {
-            match r {
-                Ok(t) => textures.push(t),
-                Err(d) => errors.push(d),
+        // Every unusable mesh and texture is reported at once.
+        let (textures, notes, memory_used) = match load_textures(&sources, search, budget) {
+            Ok(loaded) if errors.is_empty() => loaded,
+            Ok((_, _, kept)) => {
+                budget.release(kept);
+                return Err(errors);
             }
-        }
-        if !errors.is_empty() {
-            return Err(errors);
-        }
+            Err(texture_errors) => {
+                errors.extend(texture_errors);
+                return Err(errors);
+            }
+        };
+        diagnostics.extend(notes);
 
         let mut bounded: Vec<u32> = Vec::new();
         let mut linear = Vec::new();
@@ -192,7 +248,17 @@ impl PreparedScene {
             .enumerate()
             .filter_map(|(i, l)| l.shape().map(|shape| (i as u32, shape)))
             .collect();
-        Ok(PreparedScene { bvh, bvh_primitives, linear, emitters, textures, texture_of, diagnostics, scene })
+        Ok(PreparedScene {
+            bvh,
+            bvh_primitives,
+            linear,
+            emitters,
+            textures,
+            texture_of,
+            diagnostics,
+            memory_used,
+            scene,
+        })
     }
 
     /// The triangles of the scene's meshes and the memory they take.
@@ -600,10 +666,108 @@ fn obj_diagnostic(location: &Location, e: ObjError) -> Diagnostic {
     }
 }
 
-fn load_texture(source: &TextureSource, search: &TextureSearch) -> Result<Texture, TextureError> {
-    match source {
-        TextureSource::Builtin(b) => Ok(procedural::generate(*b)),
-        TextureSource::File(name) => Texture::load(&search.resolve(name)?),
+/// A texture source after the first, parallel step of loading.
+enum Probed {
+    /// A built-in texture, generated.
+    Ready(Texture),
+    /// An image file found and its header read.
+    File { path: PathBuf, info: ImageInfo },
+}
+
+/// Loads the textures `sources` name: finds and probes every file (in parallel), charges the
+/// budget in file order, then decodes (in parallel). Returns the textures, the notes, and the
+/// bytes kept; or every error.
+fn load_textures(
+    sources: &[&TextureRef],
+    search: &TextureSearch,
+    budget: &MemoryBudget,
+) -> Result<(Vec<Texture>, Vec<Diagnostic>, u64), Vec<Diagnostic>> {
+    let probed: Vec<Result<(Probed, Option<Diagnostic>), Diagnostic>> = sources
+        .par_iter()
+        .map(|t| {
+            let probe = || match &t.source {
+                TextureSource::Builtin(b) => Ok((Probed::Ready(procedural::generate(*b)), None)),
+                TextureSource::File(name) => {
+                    let found = search.locate(name)?;
+                    let info = Texture::probe(&found.path)?;
+                    let note = found.by_file_name.then(|| found_by_file_name_note(t, &found.path));
+                    Ok((Probed::File { path: found.path, info }, note))
+                }
+            };
+            probe().map_err(|e| texture_diagnostic(t, e))
+        })
+        .collect();
+    // Charge in file order, so the texture found over the budget does not depend on timing.
+    let (mut errors, mut notes) = (Vec::new(), Vec::new());
+    let (mut kept, mut decoding) = (0, 0);
+    for (t, p) in sources.iter().zip(&probed) {
+        let (probed, note) = match p {
+            Ok(ok) => ok,
+            Err(d) => {
+                errors.push(d.clone());
+                continue;
+            }
+        };
+        notes.extend(note.clone());
+        let (width, height, keeps, decodes) = match probed {
+            Probed::Ready(texture) => {
+                (texture.width(), texture.height(), memory_bytes(texture.width(), texture.height()), 0)
+            }
+            Probed::File { info, .. } => (info.width, info.height, info.kept_bytes, info.decoding_bytes),
+        };
+        match budget.charge(keeps + decodes) {
+            Ok(()) => {
+                kept += keeps;
+                decoding += decodes;
+            }
+            Err(over) => {
+                let path = PathBuf::from(written_name(t));
+                errors.push(texture_diagnostic(t, TextureError::OverBudget { path, width, height, over }));
+            }
+        }
+    }
+    if !errors.is_empty() {
+        budget.release(kept + decoding);
+        return Err(errors);
+    }
+    let decoded: Vec<Result<Texture, Diagnostic>> = probed
+        .into_par_iter()
+        .zip(sources)
+        .map(|(p, t)| match p {
+            Ok((Probed::Ready(texture), _)) => Ok(texture),
+            Ok((Probed::File { path, .. }, _)) => Texture::load(&path).map_err(|e| texture_diagnostic(t, e)),
+            Err(d) => Err(d),
+        })
+        .collect();
+    budget.release(decoding);
+    let (textures, errors): (Vec<_>, Vec<_>) = decoded.into_iter().partition(Result::is_ok);
+    if errors.is_empty() {
+        Ok((textures.into_iter().flatten().collect(), notes, kept))
+    } else {
+        budget.release(kept);
+        Err(errors.into_iter().filter_map(Result::err).collect())
+    }
+}
+
+/// The `texture=` value as written in the file.
+fn written_name(t: &TextureRef) -> String {
+    let span = t.location.span;
+    t.location.line_text.chars().skip(span.column as usize - 1).take(span.len as usize).collect()
+}
+
+/// The note on a texture found by its bare file name.
+fn found_by_file_name_note(t: &TextureRef, path: &Path) -> Diagnostic {
+    Diagnostic {
+        severity: Severity::Note,
+        message: format!(
+            "`{}` is not there as written; using `{}`, found by its file name",
+            written_name(t),
+            path.display()
+        ),
+        location: Some(t.location.clone()),
+        notes: vec![
+            "the course's scene files name textures relative to the course program's working folder".into(),
+        ],
     }
 }
 

@@ -40,8 +40,14 @@ impl Cylinder {
         }
         let along = top - base;
         let height = along.length();
-        if !height.is_finite() || height <= 0.0 {
+        if along == DVec3::ZERO {
             return Err(GeometryError::ZeroAxis);
+        }
+        if !height.is_finite() {
+            return Err(GeometryError::AxisTooLong);
+        }
+        if height == 0.0 {
+            return Err(GeometryError::AxisTooShort);
         }
         let axis = along / height;
         let seam = course_perpendicular(axis);

@@ -9,10 +9,11 @@ mod source;
 
 pub use diagnostic::{Diagnostic, Location, Severity};
 pub use parser::{
-    MAX_EMITTED_PHOTONS, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_QUALITY, MAX_SAMPLE_PHOTONS,
-    MAX_STORED_PHOTONS, Parsed, SceneError, aspect_mismatch, check_image_size, parse,
+    MAX_EMITTED_PHOTONS, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_KEPT_DIAGNOSTICS, MAX_QUALITY,
+    MAX_SAMPLE_PHOTONS, MAX_STORED_PHOTONS, Omitted, Parsed, SceneError, aspect_mismatch, check_image_size,
+    parse,
 };
-pub use source::{ReadError, SourceFile, Span};
+pub use source::{MAX_SCENE_FILE_BYTES, ReadError, SourceFile, Span};
 
 use std::sync::Arc;
 

@@ -37,27 +37,44 @@ pub const MAX_SAMPLE_PHOTONS: u64 = 100_000;
 /// Largest `iterations=`.
 pub const MAX_ITERATIONS: u64 = 1_000_000;
 
+/// Most errors, and most warnings and notes, kept from one file: a hostile file can hold
+/// millions of mistakes, and nobody reads past the first few. The rest are only counted.
+pub const MAX_KEPT_DIAGNOSTICS: usize = 50;
+
+/// Diagnostics counted but not kept, beyond [`MAX_KEPT_DIAGNOSTICS`] of their kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Omitted {
+    /// Errors not kept.
+    pub errors: usize,
+    /// Warnings and notes not kept.
+    pub others: usize,
+}
+
 /// A successfully parsed scene with the warnings and notes found on the way.
 #[derive(Clone, Debug)]
 pub struct Parsed {
     /// The scene.
     pub scene: Scene,
-    /// Warnings and notes, in file order.
+    /// Warnings and notes, in file order (the first [`MAX_KEPT_DIAGNOSTICS`]).
     pub diagnostics: Vec<Diagnostic>,
+    /// Warnings and notes past those kept.
+    pub omitted: Omitted,
 }
 
-/// A scene file with at least one error. Holds every diagnostic (errors and warnings) in file
-/// order.
+/// A scene file with at least one error. Holds the diagnostics (errors and warnings) in file
+/// order, at most [`MAX_KEPT_DIAGNOSTICS`] errors and as many others, and counts the rest.
 #[derive(Clone, Debug, thiserror::Error)]
 pub struct SceneError {
-    /// All diagnostics, errors first in importance but listed in file order.
+    /// The diagnostics kept, in file order.
     pub diagnostics: Vec<Diagnostic>,
+    /// Diagnostics past those kept.
+    pub omitted: Omitted,
 }
 
 impl SceneError {
-    /// The number of errors.
+    /// The number of errors, kept or not.
     pub fn error_count(&self) -> usize {
-        self.diagnostics.iter().filter(|d| d.is_error()).count()
+        self.diagnostics.iter().filter(|d| d.is_error()).count() + self.omitted.errors
     }
 }
 
@@ -65,6 +82,10 @@ impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for d in &self.diagnostics {
             writeln!(f, "{d}")?;
+        }
+        let more = self.omitted.errors + self.omitted.others;
+        if more > 0 {
+            writeln!(f, "... and {more} more")?;
         }
         let n = self.error_count();
         write!(f, "{n} error{}", if n == 1 { "" } else { "s" })
@@ -77,19 +98,26 @@ pub fn parse(source: &SourceFile) -> Result<Parsed, SceneError> {
     let mut parser = Parser {
         source,
         diagnostics: Vec::new(),
+        kept: Omitted::default(),
+        omitted: Omitted::default(),
+        scratch: Diagnostic::general(Severity::Note, ""),
         scene: Scene::empty(),
         seen: Seen::default(),
         materials: HashMap::new(),
     };
     parser.run();
-    let Parser { mut diagnostics, scene, .. } = parser;
+    let Parser { mut diagnostics, omitted, scene, .. } = parser;
     // File order; diagnostics about the whole file last.
     diagnostics.sort_by_key(|d| d.location.as_ref().map_or((u32::MAX, 0), |l| (l.span.line, l.span.column)));
-    if diagnostics.iter().any(Diagnostic::is_error) {
-        Err(SceneError { diagnostics })
+    if parser_has_errors(&diagnostics, omitted) {
+        Err(SceneError { diagnostics, omitted })
     } else {
-        Ok(Parsed { scene, diagnostics })
+        Ok(Parsed { scene, diagnostics, omitted })
     }
+}
+
+fn parser_has_errors(diagnostics: &[Diagnostic], omitted: Omitted) -> bool {
+    omitted.errors > 0 || diagnostics.iter().any(Diagnostic::is_error)
 }
 
 impl Scene {
@@ -241,9 +269,18 @@ const BEZIER_POINT_KEY: &str = "P";
 struct Entry<'s> {
     key: &'s str,
     key_span: Span,
-    /// The value tokens (the text after `=` when glued to the key counts as the first).
+    /// The value tokens (the text after `=` when glued to the key counts as the first), at most
+    /// [`MAX_VALUES_KEPT`] of them.
     values: Values<'s>,
+    /// How many values the line has, kept or not.
+    value_count: usize,
+    /// The span of all the values, or of the key when there are none.
+    all_values: Span,
 }
+
+/// Most values kept from one key line: no key takes more than a few, and a hostile line may hold
+/// millions (the rest are counted, not kept).
+const MAX_VALUES_KEPT: usize = 16;
 
 /// The values of a key line: up to four inline (a scene of a million spheres allocates nothing
 /// per line), more on the heap.
@@ -287,12 +324,7 @@ impl<'s> std::ops::Deref for Values<'s> {
 impl Entry<'_> {
     /// The span of all values, or of the key when there are none.
     fn values_span(&self) -> Span {
-        match (self.values.first(), self.values.last()) {
-            (Some((_, first)), Some((_, last))) => {
-                Span { line: first.line, column: first.column, len: last.column + last.len - first.column }
-            }
-            _ => self.key_span,
-        }
+        self.all_values
     }
 }
 
@@ -302,6 +334,8 @@ struct OpenBlock<'s> {
     kind: BlockKind,
     header: Span,
     entries: Vec<Entry<'s>>,
+    /// The entry of each key (a hostile block may hold a million keys).
+    index: HashMap<&'s str, usize>,
 }
 
 /// Parser state between lines.
@@ -322,6 +356,12 @@ struct Seen {
 struct Parser<'s> {
     source: &'s SourceFile,
     diagnostics: Vec<Diagnostic>,
+    /// How many errors and others are in `diagnostics`.
+    kept: Omitted,
+    /// How many were reported past [`MAX_KEPT_DIAGNOSTICS`] and dropped.
+    omitted: Omitted,
+    /// Where a dropped diagnostic is built (its notes are added to it, then it is overwritten).
+    scratch: Diagnostic,
     scene: Scene,
     seen: Seen,
     /// Untextured materials seen so far, by their numbers' bits (see [`Parser::share`]).
@@ -345,6 +385,19 @@ impl<'s> Parser<'s> {
     }
 
     fn report(&mut self, severity: Severity, span: Span, message: impl Into<String>) -> &mut Diagnostic {
+        let error = severity == Severity::Error;
+        let (kept, omitted) = if error {
+            (&mut self.kept.errors, &mut self.omitted.errors)
+        } else {
+            (&mut self.kept.others, &mut self.omitted.others)
+        };
+        if *kept >= MAX_KEPT_DIAGNOSTICS {
+            // Counted, not kept; not even its text is made (the line may be huge).
+            *omitted += 1;
+            self.scratch = Diagnostic::general(severity, "");
+            return &mut self.scratch;
+        }
+        *kept += 1;
         let d = self.source.diagnostic(severity, span, message);
         self.diagnostics.push(d);
         let last = self.diagnostics.len() - 1;
@@ -408,7 +461,7 @@ impl<'s> Parser<'s> {
                     .push("the file ends before the block is closed".into());
             }
         }
-        let has_errors = self.diagnostics.iter().any(Diagnostic::is_error);
+        let has_errors = parser_has_errors(&self.diagnostics, self.omitted);
         if self.scene.primitives.is_empty() && self.scene.lights.is_empty() && !has_errors {
             self.diagnostics.push(Diagnostic::general(
                 Severity::Warning,
@@ -421,8 +474,9 @@ impl<'s> Parser<'s> {
     fn top_level_line(&mut self, line: u32, tokens: &[Token<'s>]) -> State<'s> {
         let first = tokens[0];
         let span = first.span(line);
-        let start =
-            |kind: BlockKind, header: Span| State::InBlock(OpenBlock { kind, header, entries: Vec::new() });
+        let start = |kind: BlockKind, header: Span| {
+            State::InBlock(OpenBlock { kind, header, entries: Vec::new(), index: HashMap::new() })
+        };
         match first.text {
             "background" | "camera" => {
                 self.warn_trailing(line, &tokens[1..], "after the block name");
@@ -518,17 +572,27 @@ impl<'s> Parser<'s> {
             self.error(key_span, "a key is missing before `=`");
             return;
         }
-        let mut values = Values::new();
-        if !glued.is_empty() {
+        let glued_value = (!glued.is_empty()).then(|| {
             let column = first.column + key_len;
-            values.push((glued, Span { line, column, len: glued.chars().count() as u32 }));
+            (glued, Span { line, column, len: glued.chars().count() as u32 })
+        });
+        let mut values = Values::new();
+        for v in
+            glued_value.into_iter().chain(rest.iter().map(|t| (t.text, t.span(line)))).take(MAX_VALUES_KEPT)
+        {
+            values.push(v);
         }
-        for t in rest {
-            values.push((t.text, t.span(line)));
-        }
+        let value_count = glued_value.is_some() as usize + rest.len();
+        let last_span = rest.last().map(|t| t.span(line)).or(glued_value.map(|(_, span)| span));
+        let all_values = match (values.first(), last_span) {
+            (Some((_, first)), Some(last)) => {
+                Span { line, column: first.column, len: last.column + last.len - first.column }
+            }
+            _ => key_span,
+        };
         let repeatable = block.kind == BlockKind::Primitive(PrimitiveKind::Bezier) && key == BEZIER_POINT_KEY;
-        let entry = Entry { key, key_span, values };
-        match block.entries.iter().position(|e| e.key == key).filter(|_| !repeatable) {
+        let entry = Entry { key, key_span, values, value_count, all_values };
+        match block.index.get(key).copied().filter(|_| !repeatable) {
             Some(previous) => {
                 let earlier = block.entries[previous].key_span.line;
                 self.warning(
@@ -537,7 +601,10 @@ impl<'s> Parser<'s> {
                 );
                 block.entries[previous] = entry;
             }
-            None => block.entries.push(entry),
+            None => {
+                block.index.insert(key, block.entries.len());
+                block.entries.push(entry);
+            }
         }
     }
 
@@ -621,8 +688,8 @@ impl<'p, 's> BlockReader<'p, 's> {
     fn numbers(&mut self, key: &str, n: usize) -> Lookup<Vec<f64>> {
         let Some(entry) = self.entry(key) else { return Ok(None) };
         let what = if n == 1 { "a number".to_owned() } else { format!("{n} numbers") };
-        if entry.values.len() != n {
-            let found = entry.values.len();
+        if entry.value_count != n {
+            let found = entry.value_count;
             let message = if found == 0 {
                 format!("`{key}=` expects {what}")
             } else {
@@ -671,7 +738,7 @@ impl<'p, 's> BlockReader<'p, 's> {
     /// The raw text after `key=` (for words and paths, which may contain spaces).
     fn text(&mut self, key: &str) -> Lookup<(String, Span)> {
         let Some(entry) = self.entry(key) else { return Ok(None) };
-        if entry.values.is_empty() {
+        if entry.value_count == 0 {
             self.error(entry.key_span, format!("`{key}=` needs a value"));
             return Err(Reported);
         }
@@ -738,8 +805,11 @@ impl<'p, 's> BlockReader<'p, 's> {
     fn geometry_error(&mut self, err: GeometryError) {
         let key = match &err {
             GeometryError::NonPositiveRadius(_) => "R",
-            GeometryError::ZeroVector(k) | GeometryError::ParallelAxes(k, _) => k,
-            GeometryError::ZeroAxis => "O2",
+            GeometryError::ZeroVector(k)
+            | GeometryError::ParallelAxes(k, _)
+            | GeometryError::TooLarge(k)
+            | GeometryError::TooSmall(k) => k,
+            GeometryError::ZeroAxis | GeometryError::AxisTooLong | GeometryError::AxisTooShort => "O2",
             GeometryError::Degenerate(_) | GeometryError::ControlPoints(_) => "",
         };
         let span = self.span_of(key);
@@ -775,34 +845,44 @@ impl<'p, 's> BlockReader<'p, 's> {
             cam.eye = o;
         }
         if let Ok(Some(n)) = self.vec3("N") {
-            match n.try_normalize() {
-                Some(n) => cam.dir = n,
-                None => {
+            match crate::error::unit_direction(n, "N") {
+                Ok(n) => cam.dir = n,
+                Err(_) => {
                     let span = self.span_of("N");
                     self.error(span, "the view direction `N=` must not be the zero vector");
                 }
             }
         }
+        // Whether the lens and image sizes all read; the aspect is compared only then (an error
+        // in one of them is not also a stretched picture).
+        let mut sizes_read = true;
         for (key, slot) in [("lens_W", &mut cam.lens_width), ("lens_H", &mut cam.lens_height)] {
-            if let Ok(Some(v)) = self.number(key) {
-                if v > 0.0 {
-                    *slot = v;
-                } else {
+            match self.number(key) {
+                Ok(Some(v)) if v > 0.0 => *slot = v,
+                Ok(Some(_)) => {
                     let span = self.span_of(key);
                     self.error(span, format!("`{key}=` must be positive"));
+                    sizes_read = false;
                 }
+                Ok(None) => {}
+                Err(Reported) => sizes_read = false,
             }
         }
         let side = MAX_IMAGE_SIDE as u64;
-        if let Ok(Some(w)) = self.integer("image_W", 1, side) {
-            cam.image_width = w as u32;
+        match self.integer("image_W", 1, side) {
+            Ok(Some(w)) => cam.image_width = w as u32,
+            Ok(None) => {}
+            Err(Reported) => sizes_read = false,
         }
-        if let Ok(Some(h)) = self.integer("image_H", 1, side) {
-            cam.image_height = h as u32;
+        match self.integer("image_H", 1, side) {
+            Ok(Some(h)) => cam.image_height = h as u32,
+            Ok(None) => {}
+            Err(Reported) => sizes_read = false,
         }
         if let Err(message) = check_image_size(cam.image_width, cam.image_height) {
             let span = self.span_of("image_W");
             self.error(span, message);
+            sizes_read = false;
         }
         let q = MAX_QUALITY as u64;
         if let Ok(Some(v)) = self.integer("shade_quality", 1, q) {
@@ -839,7 +919,8 @@ impl<'p, 's> BlockReader<'p, 's> {
                 self.error(span, "`focal_dist=` must be positive");
             }
         }
-        if let Some(message) = aspect_mismatch(&cam, cam.image_width, cam.image_height) {
+        if let Some(message) = aspect_mismatch(&cam, cam.image_width, cam.image_height).filter(|_| sizes_read)
+        {
             let span = self.span_of("lens_W");
             self.warning(span, message);
         }

@@ -489,6 +489,71 @@ fn invalid_geometry_is_an_error_at_the_key() {
 }
 
 #[test]
+fn overflow_and_underflow_are_called_so() {
+    // Perpendicular axes whose cross product overflows are not "parallel".
+    assert_eq!(
+        single_error("primitive square\n O= 0 0 0\n Dx= 1e308 0 0\n Dy= 0 1e308 0\nend\n"),
+        (3, 6, "in `primitive square`, `Dx=` is too large to use".into())
+    );
+    assert_eq!(
+        single_error("light square\n O= 0 0 0\n Dx= 1e-300 0 0\n Dy= 0 1 0\n color= 1 1 1\nend\n"),
+        (3, 6, "in `light square`, `Dx=` is too small to use".into())
+    );
+    assert_eq!(
+        single_error("primitive square\n O= 0 0 0\n Dx= 1e-160 0 0\n Dy= 0 1e-170 0\nend\n"),
+        (4, 6, "in `primitive square`, `Dy=` is too small to use".into())
+    );
+    assert_eq!(
+        single_error("primitive cylinder\n O1= 0 0 -1e300\n O2= 0 0 1e300\n R= 1\nend\n"),
+        (3, 6, "in `primitive cylinder`, the axis from `O1=` to `O2=` is too long to use".into())
+    );
+    assert_eq!(
+        single_error("primitive cylinder\n O1= 0 0 0\n O2= 0 0 1e-300\n R= 1\nend\n"),
+        (3, 6, "in `primitive cylinder`, the axis from `O1=` to `O2=` is too short to use".into())
+    );
+    assert_eq!(
+        single_error(
+            "primitive plane\n N= 0 0 1\n R= 0\n Dx= 1e-300 0 0\n Dy= 0 1 0\n texture= builtin:wood\nend\n"
+        ),
+        (4, 6, "in `primitive plane`, `Dx=` is too small to use".into())
+    );
+    assert_eq!(
+        single_error(
+            "primitive plane\n N= 0 0 1\n R= 0\n Dx= 1 0 0\n Dy= 0 1e200 0\n texture= builtin:wood\nend\n"
+        ),
+        (5, 6, "in `primitive plane`, `Dy=` is too large to use".into())
+    );
+    // A tiny or huge direction is still a direction.
+    let p = ok(
+        "primitive plane\n N= 1e-300 0 0\n R= 1\nend\nprimitive sphere\n O= 0 0 0\n R= 1\n De= 0 0 1e-300\n Dc= 1e300 0 0\nend\ncamera\n N= 0 1e-300 0\nend\n",
+    );
+    let Shape::Plane(plane) = &p.scene.primitives[0].shape else { panic!("a plane") };
+    assert_eq!(plane.normal, DVec3::X);
+    let Shape::Sphere(sphere) = &p.scene.primitives[1].shape else { panic!("a sphere") };
+    assert_eq!((sphere.pole, sphere.seam), (DVec3::Z, DVec3::X));
+    assert_eq!(p.scene.camera.dir, DVec3::Y);
+}
+
+#[test]
+fn diagnostics_past_the_cap_are_counted_not_kept() {
+    // 100,000 unclosed blocks: three errors each.
+    let text = "primitive sphere\n".repeat(100_000);
+    let e = parse(&source(&text)).expect_err("errors");
+    assert_eq!(e.diagnostics.iter().filter(|d| d.is_error()).count(), MAX_KEPT_DIAGNOSTICS);
+    assert_eq!(e.error_count(), 300_000, "{:?}", e.omitted);
+    assert!(e.to_string().contains(&format!("... and {} more\n", 300_000 - MAX_KEPT_DIAGNOSTICS)));
+    // Warnings are capped on their own, so an error after many warnings is still kept.
+    let text = format!("{}primitive sphere\n R= 1\nend\n", "end\n".repeat(10_000));
+    let e = parse(&source(&text)).expect_err("errors");
+    assert_eq!(e.error_count(), 1);
+    assert_eq!(e.diagnostics.len(), MAX_KEPT_DIAGNOSTICS + 1);
+    assert_eq!(e.omitted, Omitted { errors: 0, others: 10_000 - MAX_KEPT_DIAGNOSTICS });
+    // A warning-only file past the cap still parses, and says how many were left out.
+    let p = ok(&format!("{}light point\n O= 0 0 0\n color= 1 1 1\nend\n", "end\n".repeat(60)));
+    assert_eq!((p.diagnostics.len(), p.omitted.others), (MAX_KEPT_DIAGNOSTICS, 10));
+}
+
+#[test]
 fn invalid_camera_values_are_errors() {
     assert_eq!(
         single_error("camera\n N= 0 0 0\nend\n"),
@@ -523,6 +588,23 @@ fn invalid_camera_values_are_errors() {
         single_error("primitive sphere\n O= 0 0 0\n R= 1\n refr= 1\n rindex= 0\nend\n"),
         (5, 10, "`rindex=` must be positive".into())
     );
+}
+
+#[test]
+fn a_bad_image_or_lens_size_is_one_error_without_an_aspect_warning() {
+    for text in [
+        "camera\n image_W= 0\n lens_W= 1\n lens_H= 1\nend\n",
+        "camera\n image_H= 3.5\n lens_W= 1\n lens_H= 1\nend\n",
+        "camera\n lens_W= -1\n image_W= 640\n image_H= 380\nend\n",
+        "camera\n lens_H= x\n image_W= 640\n image_H= 380\nend\n",
+    ] {
+        let all = diagnostics(text);
+        assert_eq!(all.len(), 1, "{text}: {all:#?}");
+        assert_eq!(all[0].0, Severity::Error, "{text}");
+    }
+    // A valid but mismatched size still draws the warning.
+    let all = diagnostics("camera\n image_W= 640\n image_H= 380\n lens_W= 1\n lens_H= 1\nend\n");
+    assert!(all[0].3.contains("will be stretched"), "{all:#?}");
 }
 
 #[test]
