@@ -5,12 +5,15 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use raytracer::image_io::{OutputFormat, write_image};
+use raytracer::image_io::{OutputFormat, check_output, write_image};
+use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
+use raytracer::integrator::sppm::SppmStats;
 use raytracer::integrator::{Model, choose_model};
-use raytracer::render::{MAX_SPP, Progress, RenderStats, Stage};
-use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, SourceFile};
-use raytracer::{PreparedScene, RenderSettings, Sampling, TextureSearch};
+use raytracer::memory::parse_byte_size;
+use raytracer::render::{DEFAULT_PATH_SPP, MAX_DEPTH_LIMIT, MAX_SPP, Progress, RenderStats, Stage};
+use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, MAX_KEPT_DIAGNOSTICS, Omitted, SourceFile};
+use raytracer::{MemoryBudget, PreparedScene, RenderSettings, Sampling, TextureSearch};
 
 /// The project's showcase scene, rendered when no scene file is given.
 const SHOWCASE: &str = include_str!("../../../scenes/showcase.txt");
@@ -24,6 +27,8 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render scene.txt -o scene.png --size 640x380\n  \
     rayterra render scene.txt --textures path/to/textures --spp 16\n  \
     rayterra render caustics.txt --model photon --photons 500000\n  \
+    rayterra render cornell-box.txt --model path --spp 256 -o out.exr\n  \
+    rayterra render caustics.txt --model sppm --passes 64 --photons 200000\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
     /// Scene file in the course scene language; without it, the built-in showcase scene.
@@ -37,8 +42,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
 
-    /// Stratified samples in every pixel, instead of adaptive anti-aliasing (one sample per
-    /// pixel, 16 on edges, contrasts and noisy pixels).
+    /// Samples in every pixel. Classic and photon models: stratified, instead of adaptive
+    /// anti-aliasing (one sample per pixel, 16 on edges, contrasts and noisy pixels); path model:
+    /// the paths a pixel [default: 64].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
 
@@ -60,13 +66,30 @@ pub struct RenderArgs {
     pub seed: u64,
 
     /// Light-transport model [default: the scene's `algorithm=`, else classic]. classic: the
-    /// course's ray tracer; photon: the course's photon mapper (caustics, indirect light).
+    /// course's ray tracer; photon: the course's photon mapper (caustics, indirect light); path:
+    /// a physically based path tracer; sppm: physically based stochastic progressive photon
+    /// mapping (caustics seen directly and in mirrors).
     #[arg(long, value_name = "MODEL", value_parser = parse_model)]
     pub model: Option<Model>,
 
-    /// Photons to emit (photon model), instead of the scene's `emit_photons=`.
+    /// Photons to emit (photon model), or photons a pass (sppm), instead of the scene's
+    /// `emit_photons=`.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_EMITTED_PHOTONS))]
     pub photons: Option<u64>,
+
+    /// Passes of the sppm model, instead of the scene's `iterations=`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=scene::MAX_ITERATIONS))]
+    pub passes: Option<u64>,
+
+    /// Longest light path of the path and sppm models, in segments (1: lights seen directly; 2:
+    /// direct light; ...).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_DEPTH,
+          value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
+    pub max_depth: u32,
+
+    /// Most memory the scene's textures and the photon map may take together, e.g. 512M or 8G.
+    #[arg(long, value_name = "SIZE", default_value = "4G", value_parser = parse_byte_size)]
+    pub memory_limit: u64,
 
     /// Parse and validate the scene (textures included) and print the warnings; render nothing.
     #[arg(long)]
@@ -93,23 +116,40 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
 /// Runs `rayterra render`.
 pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let started = Instant::now();
+    // A bad output path or format is found before any work, not after the render.
+    let format = if args.check { OutputFormat::from_path(&args.output) } else { check_output(&args.output) }
+        .map_err(|e| fail(&e.to_string()))?;
     let source = match &args.scene {
         Some(path) => SourceFile::read(path).map_err(|e| fail(&e.to_string()))?,
         None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
     };
     let parsed = scene::parse(&source).map_err(|e| {
-        print_diagnostics(&e.diagnostics);
+        print_diagnostics_with(&e.diagnostics, e.omitted);
         let n = e.error_count();
         fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
     })?;
-    print_diagnostics(&parsed.diagnostics);
+    print_diagnostics_with(&parsed.diagnostics, parsed.omitted);
 
+    for dir in &args.textures {
+        if !dir.is_dir() {
+            let what = if dir.exists() { "is not a folder" } else { "does not exist" };
+            eprintln!(
+                "warning: --textures `{}` {what}; no texture or mesh is looked for there",
+                dir.display()
+            );
+        }
+    }
     let search =
         TextureSearch { scene_dir: source.dir().map(Path::to_path_buf), extra_dirs: args.textures.clone() };
-    let prepared = PreparedScene::new(parsed.scene, &search).map_err(|errors| {
+    let budget = MemoryBudget::new(args.memory_limit);
+    let prepared = PreparedScene::with_budget(parsed.scene, &search, &budget).map_err(|errors| {
         print_diagnostics(&errors);
-        fail(&format!("`{}` names textures that cannot be used; nothing was rendered", source.name()))
+        fail(&format!(
+            "`{}` names textures or meshes that cannot be used; nothing was rendered",
+            source.name()
+        ))
     })?;
+    print_diagnostics(&prepared.diagnostics);
     let prepare_time = started.elapsed();
 
     let mut settings = RenderSettings::for_scene(&prepared);
@@ -132,18 +172,39 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let (model, notes) = choose_model(&prepared.scene, args.model);
     print_diagnostics(&notes);
     settings.model = model;
+    if args.spp.is_none() && model == Model::Path {
+        // The classic model's 16 samples for a lens are not the path tracer's default.
+        settings.sampling = Sampling::Adaptive;
+    }
     settings.photons = args.photons;
-    if args.photons.is_some() && !model.uses_photons() {
-        eprintln!("warning: --photons has no effect on the {} model", model.name());
-    }
-    if model.uses_photons() {
-        photon::check_memory(&settings.photon_settings(&prepared), settings.memory_limit).map_err(|d| {
-            print_diagnostics(&[d]);
-            fail(&format!("`{}` asks for too large a photon map; nothing was rendered", source.name()))
-        })?;
-    }
+    settings.passes = args.passes;
+    settings.max_depth = args.max_depth;
+    warn_unused_options(&args, model);
+    // The photon map gets what the textures left of the memory limit.
+    settings.memory_limit = budget.remaining();
     scene::check_image_size(settings.width, settings.height).map_err(|m| fail(&m))?;
-    let format = OutputFormat::from_path(&args.output).map_err(|e| fail(&e.to_string()))?;
+    let photon_settings = settings.photon_settings(&prepared);
+    let memory = match model {
+        Model::Photon => photon::check_memory(&photon_settings, settings.memory_limit),
+        Model::Sppm => raytracer::integrator::sppm::check_memory(
+            &photon_settings,
+            settings.width as u64 * settings.height as u64,
+            settings.max_depth,
+            settings.memory_limit,
+        ),
+        Model::Classic | Model::Path => Ok(()),
+    };
+    memory.map_err(|mut d| {
+        if budget.used() > 0 {
+            d.notes.push(format!(
+                "the scene's textures take {} of the memory limit of {} (--memory-limit)",
+                photon::format_bytes(budget.used()),
+                photon::format_bytes(budget.limit())
+            ));
+        }
+        print_diagnostics(&[d]);
+        fail(&format!("`{}` asks for more memory than a render may use; nothing was rendered", source.name()))
+    })?;
     if format.is_linear() && args.gamma {
         eprintln!("warning: --gamma has no effect on linear {format:?} output");
     }
@@ -151,11 +212,12 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     if args.check {
         if !args.quiet {
             let scene = &prepared.scene;
+            let (primitives, lights) = (scene.primitives.len(), scene.lights.len());
             println!(
-                "{}: ok ({} primitives, {} lights, {}x{} pixels, {} model)",
+                "{}: ok ({primitives} primitive{}, {lights} light{}, {}x{} pixels, {} model)",
                 source.name(),
-                scene.primitives.len(),
-                scene.lights.len(),
+                plural(primitives),
+                plural(lights),
                 settings.width,
                 settings.height,
                 settings.model.name()
@@ -171,6 +233,8 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
             Stage::BuildingPhotonMap => "building map",
             Stage::Tracing => "tracing rows",
             Stage::Refining => "refining pixels",
+            Stage::Sampling => "samples",
+            Stage::Passes => "passes",
         };
         if bar.message() != message {
             bar.set_message(message);
@@ -207,6 +271,25 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     Ok(())
 }
 
+/// Warns about options the chosen model does not read.
+fn warn_unused_options(args: &RenderArgs, model: Model) {
+    let name = model.name();
+    if args.photons.is_some() && !model.uses_photons() {
+        eprintln!("warning: --photons has no effect on the {name} model");
+    }
+    if args.passes.is_some() && model != Model::Sppm {
+        eprintln!("warning: --passes has no effect on the {name} model (only on sppm)");
+    }
+    if args.max_depth != DEFAULT_MAX_DEPTH && !model.is_physically_based() {
+        eprintln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
+    }
+    if args.spp.is_some() && model == Model::Sppm {
+        eprintln!(
+            "warning: --spp has no effect on the sppm model (one camera path a pixel a pass; use --passes)"
+        );
+    }
+}
+
 fn progress_bar(quiet: bool) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
@@ -229,6 +312,10 @@ fn print_summary(
     render: Duration,
 ) {
     println!("wrote {}", output.display());
+    if settings.model.is_physically_based() {
+        print_physical_summary(settings, stats, prepare, render);
+        return;
+    }
     // The photon phase is reported on its own line; the pixel phase is the rest.
     let photon_phase = stats.photons.map_or(Duration::ZERO, |p| p.trace_time + p.build_time);
     if let Some(p) = &stats.photons {
@@ -261,6 +348,60 @@ fn print_summary(
     }
 }
 
+/// The summary of a path or SPPM render: samples (or passes and photons) a second.
+fn print_physical_summary(
+    settings: &RenderSettings,
+    stats: &RenderStats,
+    prepare: Duration,
+    render: Duration,
+) {
+    let seconds = render.as_secs_f64().max(1e-9);
+    let threads = stats.threads.max(1) as f64;
+    println!(
+        "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
+        settings.width,
+        settings.height,
+        seconds,
+        prepare.as_secs_f64(),
+        stats.threads,
+        settings.model.name(),
+        settings.max_depth
+    );
+    match stats.sppm {
+        Some(SppmStats { passes, photons, stored, mean_radius, photon_seconds, .. }) => {
+            println!(
+                "{passes} passes of {} photons ({photons} emitted, {stored} stored, {:.1} s tracing them), \
+                 {:.2} passes/s, {:.2} M photons/s; mean final radius {mean_radius:.4}",
+                photons / passes.max(1),
+                photon_seconds,
+                passes as f64 / seconds,
+                photons as f64 / seconds / 1e6,
+            );
+        }
+        None => {
+            let spp = settings.path_spp();
+            let rate = stats.camera_samples as f64 / seconds;
+            println!(
+                "{spp} samples a pixel{}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
+                if spp == DEFAULT_PATH_SPP && settings.sampling == Sampling::Adaptive {
+                    " (default)"
+                } else {
+                    ""
+                },
+                stats.camera_samples,
+                rate / 1e6,
+                rate / 1e6 / threads
+            );
+        }
+    }
+    println!(
+        "{} rays, {:.1} M rays/s ({:.1} M rays/s per thread)",
+        stats.rays,
+        stats.rays as f64 / seconds / 1e6,
+        stats.rays as f64 / seconds / 1e6 / threads
+    );
+}
+
 fn print_photon_summary(p: &PhotonStats) {
     let trace = p.trace_time.as_secs_f64();
     let emitted = if p.emitted < p.requested {
@@ -278,8 +419,35 @@ fn print_photon_summary(p: &PhotonStats) {
 }
 
 fn print_diagnostics(diagnostics: &[Diagnostic]) {
+    print_diagnostics_with(diagnostics, Omitted::default());
+}
+
+/// Prints at most [`MAX_KEPT_DIAGNOSTICS`] errors and as many warnings and notes, then one line
+/// counting the rest (those beyond the cap here and those the parser only counted).
+fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
+    let (mut errors, mut others) = (0, 0);
     for d in diagnostics {
-        eprintln!("{d}");
+        let (shown, more) = if d.is_error() {
+            (&mut errors, &mut omitted.errors)
+        } else {
+            (&mut others, &mut omitted.others)
+        };
+        if *shown < MAX_KEPT_DIAGNOSTICS {
+            *shown += 1;
+            eprintln!("{d}");
+        } else {
+            *more += 1;
+        }
+    }
+    let mut parts = Vec::new();
+    if omitted.errors > 0 {
+        parts.push(format!("{} more error{}", omitted.errors, plural(omitted.errors)));
+    }
+    if omitted.others > 0 {
+        parts.push(format!("{} more warning{} and notes", omitted.others, plural(omitted.others)));
+    }
+    if !parts.is_empty() {
+        eprintln!("... and {}\n", parts.join(" and "));
     }
 }
 

@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use crate::geometry::{Sphere, Square};
+use crate::geometry::{Shape, Sphere, Square};
 
 /// The closed set of lights.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,6 +37,15 @@ impl Light {
     pub fn color(&self) -> DVec3 {
         match self {
             Light::Point { color, .. } | Light::Square { color, .. } | Light::Sphere { color, .. } => *color,
+        }
+    }
+
+    /// The light's visible shape: `None` for a point light.
+    pub fn shape(&self) -> Option<Shape> {
+        match self {
+            Light::Point { .. } => None,
+            Light::Square { shape, .. } => Some(Shape::Square(Box::new(shape.clone()))),
+            Light::Sphere { shape, .. } => Some(Shape::Sphere(shape.clone())),
         }
     }
 

@@ -18,7 +18,16 @@
 //!
 //! Rows are rendered in parallel, but each pixel's random numbers come from its own coordinates,
 //! so the image is the same bit for bit whatever the number of threads.
+//!
+//! The physically based models are driven here too. The path tracer renders any rectangle of
+//! pixels over any range of sample indices ([`path_sums`]): every sample draws from its own stream
+//! (seed, pixel, sample index) and a pixel's samples are summed exactly ([`ExactSum`]), so a
+//! render split into tiles (pixel rectangles) and passes (sample ranges) merges into the same
+//! bytes as one render: a pixel of `N` samples is `sum / N` whatever the grouping of its sums.
+//! SPPM renders any rectangle of pixels ([`crate::integrator::sppm::render`]): its photons draw
+//! from streams of (seed, pass, photon index), the same for every rectangle.
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
@@ -27,11 +36,13 @@ use rayon::prelude::*;
 use crate::camera::Camera;
 use crate::image_io::Image;
 use crate::integrator::classic::TraceContext;
+use crate::integrator::path::{DEFAULT_MAX_DEPTH, PathTracer};
 use crate::integrator::photon::{self, PhotonEstimate, PhotonStats};
+use crate::integrator::sppm::{self, SppmSettings, SppmStats};
 use crate::integrator::{Classic, Model};
 use crate::prepare::{Hit, PreparedScene};
-use crate::sampler::{PixelRng, Siblings, Strata};
-use crate::scene::{Diagnostic, PhotonSettings, check_image_size};
+use crate::sampler::{ExactSum, PixelRng, Siblings, Strata, stream};
+use crate::scene::{Algorithm, Diagnostic, PhotonSettings, check_image_size};
 
 /// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
 pub const REFINE_GRID: u32 = 4;
@@ -47,7 +58,11 @@ pub const NOISE_THRESHOLD: f64 = 2.0 / 255.0;
 /// first-pass pixel's.
 pub const MAX_NESTED_FACTOR: u32 = 4;
 /// Largest `--spp`.
-pub const MAX_SPP: u32 = 4096;
+pub const MAX_SPP: u32 = 1 << 20;
+/// Samples a pixel of the path tracer when none are asked for.
+pub const DEFAULT_PATH_SPP: u32 = 64;
+/// Deepest path `--max-depth` accepts.
+pub const MAX_DEPTH_LIMIT: u32 = 1000;
 /// The memory a render may use for its photon map unless told otherwise, in bytes (4 GiB).
 pub const DEFAULT_MEMORY_LIMIT: u64 = 4 << 30;
 
@@ -79,6 +94,10 @@ pub struct RenderSettings {
     pub photons: Option<u64>,
     /// Bytes the render's photon map may use at most.
     pub memory_limit: u64,
+    /// Deepest light path of the physically based models, in segments (`--max-depth`).
+    pub max_depth: u32,
+    /// SPPM passes, instead of the scene's `iterations=` (`--passes`).
+    pub passes: Option<u64>,
 }
 
 impl RenderSettings {
@@ -105,7 +124,26 @@ impl RenderSettings {
             model: crate::integrator::choose_model(&scene.scene, None).0,
             photons: None,
             memory_limit: DEFAULT_MEMORY_LIMIT,
+            max_depth: DEFAULT_MAX_DEPTH,
+            passes: None,
         }
+    }
+
+    /// The samples a pixel of the path tracer: `--spp`, else [`DEFAULT_PATH_SPP`].
+    pub fn path_spp(&self) -> u32 {
+        match self.sampling {
+            Sampling::Uniform(n) => n,
+            Sampling::Adaptive => DEFAULT_PATH_SPP,
+        }
+    }
+
+    /// The SPPM settings: the scene's photon keys with this render's overrides.
+    pub fn sppm_settings(&self, scene: &PreparedScene) -> SppmSettings {
+        let progressive = matches!(
+            scene.scene.camera.algorithm,
+            Some((Algorithm::ProgressivePhotonMapping | Algorithm::StochasticProgressivePhotonMapping, _))
+        );
+        SppmSettings::new(&self.photon_settings(scene), progressive, self.passes, self.max_depth, self.seed)
     }
 }
 
@@ -120,9 +158,14 @@ pub enum Stage {
     Tracing,
     /// Re-rendering the pixels on edges (adaptive mode).
     Refining,
+    /// Path tracing (units are samples: pixels times samples a pixel).
+    Sampling,
+    /// SPPM passes (units are passes).
+    Passes,
 }
 
-/// A progress report: `done` of `total` units (rows while tracing, pixels while refining).
+/// A progress report: `done` of `total` units (rows while tracing, pixels while refining, samples
+/// while path tracing, passes of SPPM).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Progress {
     /// The stage.
@@ -134,7 +177,7 @@ pub struct Progress {
 }
 
 /// Counts of the work a render did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RenderStats {
     /// Rays traced: camera, reflected, refracted, glossy and shadow rays.
     pub rays: u64,
@@ -148,6 +191,8 @@ pub struct RenderStats {
     pub lookups: u64,
     /// The photon map's making (photon model).
     pub photons: Option<PhotonStats>,
+    /// The passes and photons of an SPPM render.
+    pub sppm: Option<SppmStats>,
 }
 
 /// A finished render.
@@ -168,6 +213,9 @@ pub enum RenderError {
     /// A sample count out of range.
     #[error("the number of samples per pixel must be from 1 to {MAX_SPP}, not {0}")]
     SampleCount(u32),
+    /// A path depth out of range.
+    #[error("the path depth must be from 1 to {MAX_DEPTH_LIMIT}, not {0}")]
+    Depth(u32),
     /// Settings the scene cannot be rendered with (for example a photon map over the memory
     /// limit), with where in the scene file.
     #[error("{0}")]
@@ -196,6 +244,9 @@ pub fn render(
     {
         return Err(RenderError::SampleCount(n));
     }
+    if !(1..=MAX_DEPTH_LIMIT).contains(&settings.max_depth) {
+        return Err(RenderError::Depth(settings.max_depth));
+    }
     let threads = settings.threads.unwrap_or(0);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -219,6 +270,149 @@ pub fn render(
                 rendered
             }))
         }
+        Model::Path => Ok(pool.install(|| render_path(scene, settings, progress))),
+        Model::Sppm => {
+            let sppm_settings = settings.sppm_settings(scene);
+            let pixels = settings.width as u64 * settings.height as u64;
+            sppm::check_memory(
+                &settings.photon_settings(scene),
+                pixels,
+                settings.max_depth,
+                settings.memory_limit,
+            )
+            .map_err(|d| RenderError::Settings(Box::new(d)))?;
+            Ok(pool.install(|| {
+                let camera = camera_for(scene, settings);
+                let (w, h) = (settings.width, settings.height);
+                let total = sppm_settings.passes;
+                progress(Progress { stage: Stage::Passes, done: 0, total });
+                let report = |done| progress(Progress { stage: Stage::Passes, done, total });
+                let (colors, stats) =
+                    sppm::render(scene, &camera, &sppm_settings, w, PixelRect::full(w, h), &report);
+                Rendered {
+                    image: Image::new(w, h, colors.iter().map(|c| c.as_vec3().to_array()).collect()),
+                    stats: RenderStats {
+                        rays: stats.rays,
+                        camera_samples: pixels * stats.passes,
+                        threads: rayon::current_num_threads(),
+                        sppm: Some(stats),
+                        ..RenderStats::default()
+                    },
+                }
+            }))
+        }
+    }
+}
+
+/// The camera of a render: the scene's, at the settings' size, focused at `focal_dist=` or (a
+/// lens without it) on the surface seen at the image centre.
+pub fn camera_for(scene: &PreparedScene, settings: &RenderSettings) -> Camera {
+    let (w, h) = (settings.width, settings.height);
+    let cam = &scene.scene.camera;
+    let focus = if cam.aperture > 0.0 && cam.focal_distance.is_none() {
+        match scene.closest_hit(&Camera::new(cam, w, h, 1.0).central_ray()) {
+            Hit::Surface { hit, .. } => hit.t,
+            Hit::Emitter { t, .. } => t,
+            Hit::Miss => 1.0,
+        }
+    } else {
+        1.0
+    };
+    Camera::new(cam, w, h, focus)
+}
+
+/// A rectangle of pixels of an image: columns `x0..x1`, rows `y0..y1` (0, 0 at the top left).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelRect {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last row.
+    pub y1: u32,
+}
+
+impl PixelRect {
+    /// The whole `width x height` image.
+    pub fn full(width: u32, height: u32) -> PixelRect {
+        PixelRect { x0: 0, y0: 0, x1: width, y1: height }
+    }
+
+    /// Pixels in the rectangle.
+    pub fn len(&self) -> usize {
+        (self.x1.saturating_sub(self.x0) as usize) * (self.y1.saturating_sub(self.y0) as usize)
+    }
+
+    /// Whether the rectangle holds no pixel.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The exact sums of the path tracer's samples `samples` (sample indices) of every pixel of
+/// `rect` (row-major), and the rays traced. Sample `s` of pixel `(x, y)` draws from its own
+/// stream (seed, pixel, `s`), so sums of disjoint sample ranges and pixel rectangles merge
+/// ([`ExactSum::merge`]) into exactly the sums of one render. `progress(done)` reports samples
+/// finished (pixels times samples) from worker threads.
+pub fn path_sums(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    rect: PixelRect,
+    samples: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Vec<ExactSum>, u64) {
+    let camera = camera_for(scene, settings);
+    let tracer = PathTracer::new(scene, settings.max_depth);
+    let width = rect.x1.saturating_sub(rect.x0) as usize;
+    let mut sums = vec![ExactSum::default(); rect.len()];
+    let rays = AtomicU64::new(0);
+    let done = AtomicU64::new(0);
+    let per_row = width as u64 * (samples.end.saturating_sub(samples.start));
+    if width > 0 {
+        sums.par_chunks_mut(width).enumerate().for_each(|(row, sums)| {
+            let y = rect.y0 + row as u32;
+            let mut row_rays = 0;
+            for (i, sum) in sums.iter_mut().enumerate() {
+                let x = rect.x0 + i as u32;
+                for s in samples.clone() {
+                    let mut rng = PixelRng::for_sample(settings.seed, stream::PATH, x, y, s);
+                    let (dx, dy) = (rng.uniform(), rng.uniform());
+                    let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
+                    let result = tracer.radiance(camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
+                    sum.add(result.radiance);
+                    row_rays += result.rays;
+                }
+            }
+            rays.fetch_add(row_rays, Ordering::Relaxed);
+            progress(done.fetch_add(per_row, Ordering::Relaxed) + per_row);
+        });
+    }
+    (sums, rays.load(Ordering::Relaxed))
+}
+
+/// A whole-image path-traced render: every pixel's samples `0..spp`, averaged.
+fn render_path(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Rendered {
+    let (w, h) = (settings.width, settings.height);
+    let spp = settings.path_spp() as u64;
+    let total = w as u64 * h as u64 * spp;
+    progress(Progress { stage: Stage::Sampling, done: 0, total });
+    let report = |done| progress(Progress { stage: Stage::Sampling, done, total });
+    let (sums, rays) = path_sums(scene, settings, PixelRect::full(w, h), 0..spp, &report);
+    let pixels = sums.iter().map(|s| s.mean(spp).as_vec3().to_array()).collect();
+    Rendered {
+        image: Image::new(w, h, pixels),
+        stats: RenderStats {
+            rays,
+            camera_samples: total,
+            threads: rayon::current_num_threads(),
+            ..RenderStats::default()
+        },
     }
 }
 
@@ -236,21 +430,9 @@ const REFINE_PASS: u32 = 1;
 
 impl<'s> Renderer<'s> {
     fn new(scene: &'s PreparedScene, integrator: Classic<'s>, settings: &'s RenderSettings) -> Renderer<'s> {
-        let (w, h) = (settings.width, settings.height);
-        let cam = &scene.scene.camera;
-        // Autofocus (a lens without `focal_dist=`): the distance to the surface at the centre.
-        let focus = if cam.aperture > 0.0 && cam.focal_distance.is_none() {
-            match scene.closest_hit(&Camera::new(cam, w, h, 1.0).central_ray()) {
-                Hit::Surface { hit, .. } => hit.t,
-                Hit::Emitter { t, .. } => t,
-                Hit::Miss => 1.0,
-            }
-        } else {
-            1.0
-        };
         Renderer {
             integrator,
-            camera: Camera::new(&scene.scene.camera, w, h, focus),
+            camera: camera_for(scene, settings),
             settings,
             rays: AtomicU64::new(0),
             lookups: AtomicU64::new(0),
@@ -333,6 +515,7 @@ impl<'s> Renderer<'s> {
                 threads: rayon::current_num_threads(),
                 lookups: self.lookups.load(Ordering::Relaxed),
                 photons: None,
+                sppm: None,
             },
         }
     }

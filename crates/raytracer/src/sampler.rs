@@ -1,7 +1,11 @@
-//! Deterministic random numbers and stratified sample patterns.
+//! Deterministic random numbers, stratified sample patterns and exact sums of samples.
 //!
 //! Every pixel seeds its own generator from its coordinates, the pass and the render seed, so an
-//! image does not depend on how many threads rendered it or in which order.
+//! image does not depend on how many threads rendered it or in which order. The physically based
+//! models go further: every sample of a pixel (path tracer) and every photon of a pass (SPPM)
+//! has its own stream ([`PixelRng::for_sample`], [`PixelRng::for_photon`]), so any sub-range of
+//! pixels or samples can be rendered on its own and gives the same numbers, and their samples are
+//! summed exactly ([`ExactSum`]), so partial sums merge into the same bytes in any grouping.
 
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64Mcg;
@@ -50,6 +54,77 @@ impl PixelRng {
     #[inline]
     pub fn key(&self) -> u64 {
         self.key
+    }
+}
+
+/// Stream codes that keep the random numbers of different uses apart.
+pub mod stream {
+    /// A path-tracer camera sample.
+    pub const PATH: u64 = 0x7061_7468;
+    /// An SPPM camera path (one a pixel a pass).
+    pub const SPPM_CAMERA: u64 = 0x0073_7070_6d63_616d;
+    /// An SPPM photon.
+    pub const SPPM_PHOTON: u64 = 0x7370_706d_7068_6f74;
+}
+
+impl PixelRng {
+    /// The stream of sample `sample` of pixel `(x, y)` (0, 0 at the top left) for the use
+    /// `stream` (see [`stream`]) in a render seeded with `seed`.
+    #[inline]
+    pub fn for_sample(seed: u64, stream: u64, x: u32, y: u32, sample: u64) -> PixelRng {
+        PixelRng::from_key(hash_values(&[seed, stream, x as u64, y as u64, sample]))
+    }
+
+    /// The stream of photon `photon` of pass `pass` for the use `stream` in a render seeded with
+    /// `seed`.
+    #[inline]
+    pub fn for_photon(seed: u64, stream: u64, pass: u64, photon: u64) -> PixelRng {
+        PixelRng::from_key(hash_values(&[seed, stream, pass, photon]))
+    }
+}
+
+/// An exact sum of RGB samples: each sample is rounded once to a fixed-point grid of
+/// [`ExactSum::RESOLUTION`] (2^-40, about 1e-12) and summed in 128-bit integers, so a sum does
+/// not depend on the order or grouping of its terms. Samples beyond `2^54` in magnitude are
+/// clamped to it (no light path of a sane scene comes near) and non-finite samples count as 0,
+/// so up to 2^32 samples can be summed without overflow.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct ExactSum {
+    /// The sum of each channel in units of [`ExactSum::RESOLUTION`].
+    pub fixed: [i128; 3],
+}
+
+impl ExactSum {
+    /// The grid samples are rounded to.
+    pub const RESOLUTION: f64 = 1.0 / (1u64 << 40) as f64;
+    /// The largest magnitude of a sample.
+    pub const LIMIT: f64 = (1u64 << 54) as f64;
+
+    /// Adds a sample.
+    #[inline]
+    pub fn add(&mut self, sample: glam::DVec3) {
+        for (sum, v) in self.fixed.iter_mut().zip(sample.to_array()) {
+            let v = if v.is_finite() { v.clamp(-Self::LIMIT, Self::LIMIT) } else { 0.0 };
+            *sum += (v / Self::RESOLUTION).round() as i128;
+        }
+    }
+
+    /// Adds another sum (for example of another range of samples).
+    #[inline]
+    pub fn merge(&mut self, other: &ExactSum) {
+        for (a, b) in self.fixed.iter_mut().zip(other.fixed) {
+            *a += b;
+        }
+    }
+
+    /// The mean of `count` samples summed here (0 for none).
+    #[inline]
+    pub fn mean(&self, count: u64) -> glam::DVec3 {
+        if count == 0 {
+            return glam::DVec3::ZERO;
+        }
+        let scale = Self::RESOLUTION / count as f64;
+        glam::DVec3::from_array(self.fixed.map(|f| f as f64 * scale))
     }
 }
 
@@ -185,5 +260,47 @@ mod tests {
         let c = PixelRng::new(9, 11, 10, 0).uniform();
         assert_eq!(a, b);
         assert_ne!(a[0], c);
+    }
+
+    #[test]
+    fn exact_sums_do_not_depend_on_grouping() {
+        let samples: Vec<glam::DVec3> = (0..1000)
+            .map(|i| {
+                let mut r = PixelRng::for_sample(3, stream::PATH, 1, 2, i);
+                glam::DVec3::new(r.uniform() * 1e3, r.uniform() * 1e-6, -r.uniform())
+            })
+            .collect();
+        let mut whole = ExactSum::default();
+        samples.iter().for_each(|&s| whole.add(s));
+        let mut parts = ExactSum::default();
+        for chunk in samples.chunks(37).rev() {
+            let mut part = ExactSum::default();
+            chunk.iter().for_each(|&s| part.add(s));
+            parts.merge(&part);
+        }
+        assert_eq!(whole, parts);
+        let plain: glam::DVec3 = samples.iter().sum::<glam::DVec3>() / 1000.0;
+        assert!((whole.mean(1000) - plain).abs().max_element() < 1e-11);
+        let mut odd = ExactSum::default();
+        odd.add(glam::DVec3::new(f64::NAN, f64::INFINITY, 1e300));
+        assert_eq!(odd.mean(1), glam::DVec3::new(0.0, 0.0, ExactSum::LIMIT));
+    }
+
+    #[test]
+    fn sample_and_photon_streams_are_keyed_by_every_index() {
+        let first = |mut r: PixelRng| r.uniform();
+        let a = first(PixelRng::for_sample(1, stream::PATH, 2, 3, 4));
+        assert_eq!(a, first(PixelRng::for_sample(1, stream::PATH, 2, 3, 4)));
+        for other in [
+            PixelRng::for_sample(2, stream::PATH, 2, 3, 4),
+            PixelRng::for_sample(1, stream::SPPM_CAMERA, 2, 3, 4),
+            PixelRng::for_sample(1, stream::PATH, 3, 2, 4),
+            PixelRng::for_sample(1, stream::PATH, 2, 3, 5),
+        ] {
+            assert_ne!(a, first(other));
+        }
+        let p = first(PixelRng::for_photon(1, stream::SPPM_PHOTON, 0, 7));
+        assert_ne!(p, first(PixelRng::for_photon(1, stream::SPPM_PHOTON, 1, 7)));
+        assert_ne!(p, first(PixelRng::for_photon(1, stream::SPPM_PHOTON, 0, 8)));
     }
 }

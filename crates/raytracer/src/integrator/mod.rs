@@ -1,10 +1,20 @@
 //! Light-transport models, one module each, over shared sampling code:
 //! - [`classic`]: the course template's model (spec section 5), the default for course files;
-//! - [`photon`]: the course's photon mapper (spec section 10), over the [`photon_map`].
+//! - [`photon`]: the course's photon mapper (spec section 10), over the [`photon_map`];
+//! - [`path`]: the physically based path tracer (spec section 11);
+//! - [`sppm`]: stochastic progressive photon mapping (spec section 11), over the same
+//!   [`photon_map`] and the path tracer's camera walk.
+//!
+//! The physically based models share the material lobes of [`bsdf`] and the light sampling of
+//! [`lights`].
 
+pub mod bsdf;
 pub mod classic;
+pub mod lights;
+pub mod path;
 pub mod photon;
 pub mod photon_map;
+pub mod sppm;
 
 pub use classic::Classic;
 
@@ -17,50 +27,47 @@ pub enum Model {
     Classic,
     /// The course's photon mapper (spec section 10).
     Photon,
+    /// The physically based path tracer (spec section 11).
+    Path,
+    /// Stochastic progressive photon mapping (spec section 11).
+    Sppm,
 }
 
 impl Model {
     /// Every model, in the order the help text lists them.
-    pub const ALL: [Model; 2] = [Model::Classic, Model::Photon];
+    pub const ALL: [Model; 4] = [Model::Classic, Model::Photon, Model::Path, Model::Sppm];
 
     /// The model's name on the command line (`--model NAME`).
     pub fn name(self) -> &'static str {
         match self {
             Model::Classic => "classic",
             Model::Photon => "photon",
+            Model::Path => "path",
+            Model::Sppm => "sppm",
         }
     }
 
-    /// Whether the model reads the photon map settings of the camera block.
+    /// Whether the model reads the photon settings of the camera block.
     pub fn uses_photons(self) -> bool {
-        matches!(self, Model::Photon)
+        matches!(self, Model::Photon | Model::Sppm)
+    }
+
+    /// Whether the model is physically based (reads `--max-depth`, writes unclamped radiance).
+    pub fn is_physically_based(self) -> bool {
+        matches!(self, Model::Path | Model::Sppm)
     }
 }
 
 /// The model a render uses: `requested` (the command line's `--model`) when given, otherwise the
-/// one the scene's `algorithm=` names, otherwise the classic model. Also returns the warnings the
-/// choice calls for: a scene set up for photon mapping rendered by the classic model by default,
-/// and `algorithm=` values whose model this version does not have.
+/// one the scene's `algorithm=` names (`PPM` and `SPPM` both name [`Model::Sppm`]), otherwise
+/// the classic model. Also returns the warnings the choice calls for: a scene set up for photon
+/// mapping rendered by the classic model by default.
 pub fn choose_model(scene: &Scene, requested: Option<Model>) -> (Model, Vec<Diagnostic>) {
     let mut notes = Vec::new();
-    let from_file = scene.camera.algorithm.as_ref().map(|(algorithm, location)| match algorithm {
+    let from_file = scene.camera.algorithm.as_ref().map(|(algorithm, _)| match algorithm {
         Algorithm::RayTracing => Model::Classic,
         Algorithm::PhotonMapping => Model::Photon,
-        Algorithm::ProgressivePhotonMapping | Algorithm::StochasticProgressivePhotonMapping => {
-            if requested.is_none() {
-                notes.push(Diagnostic {
-                    severity: Severity::Warning,
-                    message: format!(
-                        "`algorithm= {}` names stochastic progressive photon mapping, which this \
-                             version does not have yet; rendering with the course's photon mapper",
-                        algorithm.name()
-                    ),
-                    location: Some(location.clone()),
-                    notes: vec!["choose a model with `--model classic` or `--model photon`".into()],
-                });
-            }
-            Model::Photon
-        }
+        Algorithm::ProgressivePhotonMapping | Algorithm::StochasticProgressivePhotonMapping => Model::Sppm,
     });
     let model = requested.or(from_file).unwrap_or(Model::Classic);
     if requested.is_none()

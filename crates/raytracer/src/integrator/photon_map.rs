@@ -1,6 +1,7 @@
 //! The photon map: stored photons in a k-d tree, with the two queries the photon models ask of
 //! it: the `k` nearest photons within a radius (the course's photon mapper, spec section 10) and
-//! every photon within a radius (progressive photon mapping).
+//! every photon within a radius (stochastic progressive photon mapping). The map holds any
+//! [`MapEntry`]: the course's [`Photon`], or SPPM's photons, which also carry their path depth.
 //!
 //! Layout: photons are reordered so that every subtree is a contiguous range of the photon array,
 //! split at the median of the widest axis of its photons' bounding box until at most
@@ -36,6 +37,19 @@ pub struct Photon {
     pub power: Vec3,
 }
 
+/// What a photon map can hold: anything with a position.
+pub trait MapEntry: Copy + Send + Sync {
+    /// The position, world space.
+    fn position(&self) -> Vec3;
+}
+
+impl MapEntry for Photon {
+    #[inline]
+    fn position(&self) -> Vec3 {
+        self.position
+    }
+}
+
 /// An interior node: the split plane and the index of the second child (the first follows the
 /// node). Leaves have no node of their own: a range of at most [`LEAF_SIZE`] photons is a leaf.
 #[derive(Clone, Copy, Debug, Default)]
@@ -49,10 +63,16 @@ const AXIS_SHIFT: u32 = 30;
 const RIGHT_MASK: u32 = (1 << AXIS_SHIFT) - 1;
 
 /// Photons in a k-d tree.
-#[derive(Clone, Debug, Default)]
-pub struct PhotonMap {
-    photons: Vec<Photon>,
+#[derive(Clone, Debug)]
+pub struct PhotonMap<P: MapEntry = Photon> {
+    photons: Vec<P>,
     nodes: Vec<Node>,
+}
+
+impl<P: MapEntry> Default for PhotonMap<P> {
+    fn default() -> PhotonMap<P> {
+        PhotonMap { photons: Vec::new(), nodes: Vec::new() }
+    }
 }
 
 /// A photon found by a query: its index in the map and its squared distance to the query point.
@@ -79,9 +99,9 @@ fn node_count(len: usize) -> usize {
     if len <= LEAF_SIZE { 0 } else { 1 + node_count(len / 2) + node_count(len - len / 2) }
 }
 
-impl PhotonMap {
+impl<P: MapEntry> PhotonMap<P> {
     /// Builds the map over `photons` (in any order; the map's order is its own).
-    pub fn build(mut photons: Vec<Photon>) -> PhotonMap {
+    pub fn build(mut photons: Vec<P>) -> PhotonMap<P> {
         assert!(photons.len() < (1 << AXIS_SHIFT), "photon map too large");
         let mut nodes = vec![Node::default(); node_count(photons.len())];
         build_subtree(&mut photons, &mut nodes, 0);
@@ -101,13 +121,13 @@ impl PhotonMap {
 
     /// Bytes of memory the map holds.
     pub fn memory_bytes(&self) -> usize {
-        self.photons.capacity() * std::mem::size_of::<Photon>()
+        self.photons.capacity() * std::mem::size_of::<P>()
             + self.nodes.capacity() * std::mem::size_of::<Node>()
     }
 
     /// Photon `i` (indices as [`Found`] gives them).
     #[inline]
-    pub fn photon(&self, i: u32) -> &Photon {
+    pub fn photon(&self, i: u32) -> &P {
         &self.photons[i as usize]
     }
 
@@ -162,7 +182,7 @@ impl PhotonMap {
 
     #[inline]
     fn dist2(&self, p: Vec3, i: usize) -> f32 {
-        let q = self.photons[i].position;
+        let q = self.photons[i].position();
         let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
         dx * dx + dy * dy + dz * dz
     }
@@ -170,7 +190,7 @@ impl PhotonMap {
     /// Visits the leaves that may hold photons within the (possibly shrinking) radius, nearest
     /// side first: `leaf(map, lo, hi, radius2)` scans photons `lo..hi` and may shrink the radius.
     #[inline]
-    fn walk(&self, p: Vec3, radius2: &mut f32, mut leaf: impl FnMut(&PhotonMap, usize, usize, &mut f32)) {
+    fn walk(&self, p: Vec3, radius2: &mut f32, mut leaf: impl FnMut(&PhotonMap<P>, usize, usize, &mut f32)) {
         /// A pending subtree: its first node, its photon range and a lower bound of the squared
         /// distance from the query point to its cell.
         #[derive(Clone, Copy, Default)]
@@ -224,13 +244,13 @@ fn keep_nearest(found: &mut Vec<Found>, k: usize) {
 
 /// Builds the subtree over `photons`, whose first node is `nodes[0]` and whose node indices are
 /// offset by `first`.
-fn build_subtree(photons: &mut [Photon], nodes: &mut [Node], first: usize) {
+fn build_subtree<P: MapEntry>(photons: &mut [P], nodes: &mut [Node], first: usize) {
     if photons.len() <= LEAF_SIZE {
         return;
     }
-    let (min, max) = photons
-        .iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p.position), hi.max(p.position)));
+    let (min, max) = photons.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+        (lo.min(p.position()), hi.max(p.position()))
+    });
     let extent = max - min;
     let axis = if extent.x >= extent.y && extent.x >= extent.z {
         0
@@ -240,11 +260,11 @@ fn build_subtree(photons: &mut [Photon], nodes: &mut [Node], first: usize) {
         2
     };
     let mid = photons.len() / 2;
-    photons.select_nth_unstable_by(mid, |a, b| a.position[axis].total_cmp(&b.position[axis]));
+    photons.select_nth_unstable_by(mid, |a, b| a.position()[axis].total_cmp(&b.position()[axis]));
     let left_nodes = node_count(mid);
     let right = first + 1 + left_nodes;
     nodes[0] = Node {
-        split: photons[mid].position[axis],
+        split: photons[mid].position()[axis],
         axis_and_right: (axis as u32) << AXIS_SHIFT | right as u32,
     };
     let parallel = photons.len() >= PARALLEL_BUILD;
