@@ -208,6 +208,8 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
             CameraPose::new(v.position.into(), v.yaw_degrees, v.pitch_degrees)
         })
     });
+    let source = if args.camera.is_some() { "--camera" } else { "the settings file's view" };
+    let pose = keep_camera_inside(pose, &world, &config, source);
     let view = FrameView {
         pose,
         field_of_view_degrees: args.fov.or(saved.map(|v| v.field_of_view_degrees)).unwrap_or(45.0),
@@ -217,6 +219,40 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         Some(out) => screenshot(&args, &world, &config, &settings, &view, out),
         None => open_window(&args, &world, &config, settings, &view),
     }
+}
+
+/// `pose` moved where the window lets the camera go (inside the sky box, 0.2 units above the
+/// water and the ground), with a warning naming `source` when it had to move: from under the
+/// water the view is upside down, from outside the sky box it is black.
+fn keep_camera_inside(pose: CameraPose, world: &World, config: &SceneConfig, source: &str) -> CameraPose {
+    let limits = config.camera_limits();
+    let wanted = pose.position;
+    let ground = |x, z| terrain_world::heightfield::height_under(&world.heightmap, config, x, z);
+    let allowed = limits.clamp(wanted, ground);
+    if allowed == wanted {
+        return pose;
+    }
+    let reason = if wanted.x < limits.min.x
+        || wanted.z < limits.min.z
+        || wanted.x > limits.max.x
+        || wanted.z > limits.max.z
+        || wanted.y > limits.max.y
+    {
+        format!(
+            "outside the sky box (the camera stays within x {:.0}..{:.0}, z {:.0}..{:.0}, y up to {:.0})",
+            limits.min.x, limits.max.x, limits.min.z, limits.max.z, limits.max.y
+        )
+    } else if ground(wanted.x, wanted.z).is_some_and(|h| h > limits.min.y && wanted.y < h + limits.clearance)
+    {
+        format!("under the ground or closer to it than {} units", limits.clearance)
+    } else {
+        format!("under the water or closer to it than {} units", limits.clearance)
+    };
+    eprintln!(
+        "warning: {source} puts the camera at {},{},{}, {reason}; moved to {},{},{} as the window would",
+        wanted.x, wanted.y, wanted.z, allowed.x, allowed.y, allowed.z
+    );
+    CameraPose { position: allowed, ..pose }
 }
 
 /// The settings of `--settings` (defaults without it), with `--look` applied. In a window a
@@ -391,7 +427,7 @@ fn screenshot(
         .map_err(|error| error.to_string())?;
     report_gpu_memory(&headless.renderer().gpu_memory(), headless.renderer().cpu_bytes(), world);
     let image = headless.render(&gpu, view).map_err(|error| error.to_string())?;
-    terrain::output::save_frame(&image, out).map_err(|error| error.to_string())?;
+    terrain::output::save_frame(image, out).map_err(|error| error.to_string())?;
     eprintln!("rendered in {} ({} look)", seconds(started.elapsed()), settings.look.name());
     println!("wrote {} ({}x{})", out.display(), args.size.0, args.size.1);
     Ok(())

@@ -35,25 +35,32 @@ impl OffscreenTarget {
     /// A `width` x `height` target of `format` (8-bit RGBA or BGRA).
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat, width: u32, height: u32) -> Result<Self, RenderError> {
         check_frame_size(gpu, width, height)?;
-        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("off-screen target"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
         let row_bytes = 4 * width;
         let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let padded_row_bytes = row_bytes.div_ceil(align) * align;
-        let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: u64::from(padded_row_bytes) * u64::from(height),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
+        // Per pixel: the target, its read-back buffer, the image read back on the CPU (4 bytes
+        // each), the depth buffer (4), the reflection and its depth (up to 8), and the
+        // rasteriser's own copies on a software GPU (about 4).
+        gpu.reserve("off-screen frame", 28 * u64::from(width) * u64::from(height))?;
+        let (texture, readback) = gpu.scoped("off-screen frame", || {
+            let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("off-screen target"),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: u64::from(padded_row_bytes) * u64::from(height),
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            (texture, readback)
+        })?;
         gpu.check()?;
         Ok(Self {
             view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
@@ -101,7 +108,13 @@ impl OffscreenTarget {
             .recv()
             .map_err(|error| GpuError::Readback(error.to_string()))?
             .map_err(|error| GpuError::Readback(error.to_string()))?;
-        let mut pixels = Vec::with_capacity(4 * width as usize * height as usize);
+        let mut pixels = Vec::new();
+        pixels.try_reserve_exact(4 * width as usize * height as usize).map_err(|_| {
+            GpuError::OutOfMemory {
+                what: format!("{width}x{height} image read back from the GPU"),
+                message: "the system refused the allocation".into(),
+            }
+        })?;
         {
             let mapped =
                 self.readback.get_mapped_range(..).map_err(|error| GpuError::Readback(error.to_string()))?;

@@ -49,10 +49,11 @@ pub fn check_output(path: &Path) -> Result<ImageFormat, SaveError> {
 }
 
 /// Writes a rendered frame to `path` in the format its extension names (PNG keeps the alpha
-/// channel; BMP and JPEG are written as RGB), atomically.
-pub fn save_frame(frame: &image::RgbaImage, path: &Path) -> Result<(), SaveError> {
+/// channel; BMP and JPEG are written as RGB), atomically. Takes the frame, so that a large one
+/// is not copied.
+pub fn save_frame(frame: image::RgbaImage, path: &Path) -> Result<(), SaveError> {
     let format = format_for(path)?;
-    let image = DynamicImage::ImageRgba8(frame.clone());
+    let image = DynamicImage::ImageRgba8(frame);
     let image = match format {
         ImageFormat::Png => image,
         _ => DynamicImage::ImageRgb8(image.into_rgb8()),
@@ -137,7 +138,7 @@ mod tests {
         std::fs::create_dir_all(&dir).expect("temp dir");
         let frame = image::RgbaImage::from_pixel(4, 3, image::Rgba([200, 100, 50, 255]));
         for name in ["f.png", "f.bmp", "f.jpg"] {
-            save_frame(&frame, &dir.join(name)).expect("writable");
+            save_frame(frame.clone(), &dir.join(name)).expect("writable");
             let back = image::open(dir.join(name)).expect("readable").into_rgb8();
             let pixel = back.get_pixel(1, 1).0;
             assert!((i32::from(pixel[0]) - 200).abs() < 8, "{name}: {pixel:?}");

@@ -131,16 +131,29 @@ impl LandPass {
         let texture_bytes = |image: &image::RgbaImage| image.as_raw().len() as u64 * 4 / 3;
         let gpu_bytes =
             (vertex_bytes + index_bytes, texture_bytes(&world.colour_map) + texture_bytes(&world.detail_map));
-        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("land vertices"),
-            contents: bytemuck::cast_slice(&mesh.positions),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("land indices"),
-            contents: bytemuck::cast_slice(&mesh.indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
+        // Created empty and filled through the queue (not mapped at creation): a buffer the GPU
+        // has no memory for is then reported by the caller's error scope instead of panicking
+        // when its mapping is written.
+        let filled = |label, contents: &[u8], usage| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (contents.len() as u64).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT),
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            // Whole words straight from the mesh, then the last bytes padded to a word.
+            let whole = contents.len() / 4 * 4;
+            queue.write_buffer(&buffer, 0, &contents[..whole]);
+            if whole < contents.len() {
+                let mut tail = [0u8; 4];
+                tail[..contents.len() - whole].copy_from_slice(&contents[whole..]);
+                queue.write_buffer(&buffer, whole as u64, &tail);
+            }
+            buffer
+        };
+        let vertices =
+            filled("land vertices", bytemuck::cast_slice(&mesh.positions), wgpu::BufferUsages::VERTEX);
+        let indices = filled("land indices", bytemuck::cast_slice(&mesh.indices), wgpu::BufferUsages::INDEX);
         let indirect = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("land draws"),
             size: 2 * INDIRECT_ARGS_SIZE * max_draws(&mesh),

@@ -11,6 +11,7 @@ mod grid;
 mod land;
 mod light_map;
 mod lighting;
+mod memory;
 mod modern;
 mod pipeline;
 mod reflection;
@@ -187,18 +188,36 @@ impl Renderer {
             target_format: self.target_format,
         };
         let side = world.heightmap.columns().max(world.heightmap.rows());
+        let samples = u64::from(world.heightmap.columns()) * u64::from(world.heightmap.rows());
         let needs_grid = settings.look == Look::Modern || side > MESH_MAX_SIDE;
         if needs_grid && self.grid.is_none() {
-            self.grid = Some(GridTerrain::new(&context, &world.heightmap, &self.config)?);
+            // The height texture (2 bytes a sample) and the level-of-detail tree's bounds.
+            gpu.reserve("heightmap on the GPU", samples * 2 + samples / 4)?;
+            let grid = gpu.scoped("heightmap on the GPU", || {
+                GridTerrain::new(&context, &world.heightmap, &self.config)
+            })??;
+            self.grid = Some(grid);
         }
         match settings.look {
             Look::Course if self.course.is_none() => {
                 let grid = (side > MESH_MAX_SIDE).then_some(self.grid.as_ref()).flatten();
-                self.course = Some(CourseLook::new(&context, world, &self.config, self.multi_draw, grid)?);
+                if grid.is_none() {
+                    // The static mesh: positions (12 bytes) and indices (2 bytes, about 6 a
+                    // sample) at every level of detail (a third more), and its build on the CPU.
+                    gpu.reserve("terrain mesh", samples * (12 + 12) * 4 / 3 * 2)?;
+                }
+                let course = gpu.scoped("course look's terrain and textures", || {
+                    CourseLook::new(&context, world, &self.config, self.multi_draw, grid)
+                })??;
+                self.course = Some(course);
             }
             Look::Modern if self.modern.is_none() => {
                 if let Some(grid) = &self.grid {
-                    self.modern = Some(ModernLook::new(&context, world, &self.config, grid)?);
+                    let modern = gpu
+                        .scoped("modern look's light map, shadow map, reflection and textures", || {
+                            ModernLook::new(&context, world, &self.config, grid)
+                        })??;
+                    self.modern = Some(modern);
                 }
             }
             _ => {}
