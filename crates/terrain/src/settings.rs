@@ -15,6 +15,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::output::{SaveError, write_file};
 
+/// Largest settings file read, in bytes (a full one is about 1 KB).
+pub const MAX_SETTINGS_BYTES: u64 = 1 << 20;
+
 /// Which look the renderer draws.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -351,10 +354,20 @@ impl Settings {
         toml::to_string_pretty(self).unwrap_or_default()
     }
 
-    /// Reads settings from a TOML file.
+    /// Reads settings from a TOML file (a regular file of at most [`MAX_SETTINGS_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, SettingsError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| SettingsError::Read { path: path.to_path_buf(), source })?;
+        let read_error = |source| SettingsError::Read { path: path.to_path_buf(), source };
+        let metadata = std::fs::metadata(path).map_err(read_error)?;
+        if !metadata.is_file() {
+            return Err(read_error(std::io::Error::other("not a regular file")));
+        }
+        if metadata.len() > MAX_SETTINGS_BYTES {
+            return Err(read_error(std::io::Error::other(format!(
+                "{} bytes is too large for a settings file (at most {MAX_SETTINGS_BYTES})",
+                metadata.len()
+            ))));
+        }
+        let text = std::fs::read_to_string(path).map_err(read_error)?;
         Self::from_toml(&text, path)
     }
 
@@ -409,6 +422,22 @@ mod tests {
         let error = Settings::from_toml("[water]\ncolour = [0.1, 0.2, 1.5]\n", Path::new("w.toml"))
             .expect_err("colour out of range");
         assert!(error.to_string().contains("water.colour[2]"), "{error}");
+    }
+
+    #[test]
+    fn folders_devices_and_huge_files_are_refused_before_reading() {
+        let error = Settings::load(&std::env::temp_dir()).expect_err("a folder").to_string();
+        assert!(error.contains("not a regular file"), "{error}");
+        if Path::new("/dev/zero").exists() {
+            let error = Settings::load(Path::new("/dev/zero")).expect_err("a device").to_string();
+            assert!(error.contains("/dev/zero") && error.contains("not a regular file"), "{error}");
+        }
+        let path = std::env::temp_dir().join(format!("rayterra-huge-settings-{}.toml", std::process::id()));
+        let file = std::fs::File::create(&path).expect("temp file");
+        file.set_len(MAX_SETTINGS_BYTES + 1).expect("sparse file");
+        let error = Settings::load(&path).expect_err("too large").to_string();
+        let _ = std::fs::remove_file(&path);
+        assert!(error.contains("too large"), "{error}");
     }
 
     #[test]

@@ -26,7 +26,8 @@ use crate::output::{SaveError, save_image};
 use crate::panel::{Panel, PanelRequests};
 use crate::render::{Backend, FrameView, Gpu, GpuError, GpuMemory, RenderError, Renderer};
 use crate::settings::{Settings, ViewSettings};
-use crate::world::{Heightfield, World};
+use crate::world::World;
+use crate::world::heightfield::height_under;
 
 /// How to open the window.
 #[derive(Debug, Clone, PartialEq)]
@@ -152,7 +153,6 @@ pub fn run(
         panel_open: false,
         world,
         config,
-        ground: Heightfield::new(&world.heightmap, config),
         options,
         notice,
         camera,
@@ -202,7 +202,6 @@ struct App<'a> {
     panel_open: bool,
     world: &'a World,
     config: &'a SceneConfig,
-    ground: Heightfield,
     options: WindowOptions,
     notice: &'a mut dyn FnMut(Notice),
     camera: FlyCamera,
@@ -430,8 +429,10 @@ impl App<'_> {
         self.last_frame = Some(now);
         self.first_frame.get_or_insert(now);
         let limits = self.config.camera_limits();
-        let ground = &self.ground;
-        self.camera.update(step.as_secs_f32(), &limits, |x, z| ground.height_at(x, z));
+        // One query a frame, read from the heightmap itself: no full-resolution copy of the
+        // heights (268 MB at 8193 samples a side) is kept for it.
+        let (heightmap, config) = (&self.world.heightmap, self.config);
+        self.camera.update(step.as_secs_f32(), &limits, |x, z| height_under(heightmap, config, x, z));
         let view = self.view();
         let Some(running) = &mut self.running else {
             return;
