@@ -5,24 +5,28 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use terrain::SceneConfig;
 use terrain::camera::{CameraPose, MAX_FIELD_OF_VIEW_DEGREES, MIN_FIELD_OF_VIEW_DEGREES};
 use terrain::controls;
-use terrain::headless::render_image;
-use terrain::render::{Backend, FrameView, Gpu};
+use terrain::headless::HeadlessRenderer;
+use terrain::render::{Backend, FrameView, Gpu, GpuMemory};
 use terrain::window::{self, Notice, WindowOptions};
-use terrain::world::procedural::{self, ProceduralOptions, Stage};
+use terrain::world::procedural::{self, ProceduralOptions, Progress, Stage};
 use terrain::world::{self as terrain_world, Heightmap, World};
+use terrain::{Look, SceneConfig, Settings};
 
 /// Largest accepted side of `--size`, in pixels (GPUs may allow less; that is checked too).
 const MAX_SIDE: u32 = 16_384;
+
+/// Where the window's panel saves its settings without `--settings`.
+const DEFAULT_SETTINGS_FILE: &str = "rayterra-terrain.toml";
 
 /// The help text after the options: the window's controls and examples.
 fn after_help() -> String {
     format!(
         "Controls:\n{}\nExamples:\n  rayterra terrain\n  rayterra terrain --seed 3\n  \
          rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  \
-         rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3",
+         rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3\n  \
+         rayterra terrain --look course\n  rayterra terrain --settings sunset.toml --screenshot sunset.png",
         controls::help()
     )
 }
@@ -68,14 +72,25 @@ pub struct TerrainArgs {
           value_parser = parse_pose)]
     camera: Option<CameraPose>,
 
-    /// Vertical field of view in degrees (1 to 90).
-    #[arg(long, value_name = "DEGREES", default_value_t = 45.0, value_parser = parse_fov)]
-    fov: f32,
+    /// Vertical field of view in degrees (1 to 90). Default: 45 (or the settings file's view).
+    #[arg(long, value_name = "DEGREES", value_parser = parse_fov)]
+    fov: Option<f32>,
 
     /// Scene time in seconds: where the drifting water is (the window's clock starts there).
-    #[arg(long, value_name = "SECONDS", default_value_t = 0.0, allow_hyphen_values = true,
-          value_parser = parse_time)]
-    time: f64,
+    /// Default: 0 (or the settings file's view).
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = parse_time)]
+    time: Option<f64>,
+
+    /// The look: `modern` (sun, shadows, fog, reflecting and refracting water; the default) or
+    /// `course` (the course's picture, exactly). Overrides the settings file's.
+    #[arg(long, value_name = "LOOK", value_parser = parse_look)]
+    look: Option<Look>,
+
+    /// Settings file (TOML): the look and every tunable of the modern look, and optionally a
+    /// camera and time. Read at start; the window's panel (F1) saves to it. `--screenshot`
+    /// renders with it (the command line's --camera, --fov, --time and --look win).
+    #[arg(long, value_name = "FILE")]
+    settings: Option<PathBuf>,
 
     /// Graphics backend (the chosen adapter is printed).
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
@@ -126,6 +141,10 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
     crate::size::parse_size(text, MAX_SIDE)
 }
 
+fn parse_look(text: &str) -> Result<Look, String> {
+    text.parse()
+}
+
 fn parse_pose(text: &str) -> Result<CameraPose, String> {
     text.parse().map_err(|error| format!("{error}"))
 }
@@ -167,17 +186,117 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         // Refuse an unwritable format or folder before any work.
         terrain::output::check_output(out).map_err(|error| error.to_string())?;
     }
+    let settings = load_settings(&args)?;
     let world = load_world(&args, &config)?;
     if let Some(dir) = &args.export_assets {
         let written = terrain_world::export::save_course_folder(&world, dir).map_err(|e| e.to_string())?;
         println!("wrote {} files to {}", written.len(), dir.display());
         return Ok(());
     }
-    let pose = args.camera.unwrap_or(config.camera_start);
+    let heightmap_bytes = world.heightmap.levels().len() * world.heightmap.bytes_per_sample();
+    eprintln!(
+        "memory (CPU): world {} (heightmap {}, {} bytes a sample; images {})",
+        megabytes(world.memory_bytes() as u64),
+        megabytes(heightmap_bytes as u64),
+        world.heightmap.bytes_per_sample(),
+        megabytes((world.memory_bytes() - heightmap_bytes) as u64),
+    );
+    // The command line's view, then the settings file's, then the course's start.
+    let saved = settings.view.as_ref();
+    let pose = args.camera.unwrap_or_else(|| {
+        saved.map_or(config.camera_start, |v| {
+            CameraPose::new(v.position.into(), v.yaw_degrees, v.pitch_degrees)
+        })
+    });
+    let source = if args.camera.is_some() { "--camera" } else { "the settings file's view" };
+    let pose = keep_camera_inside(pose, &world, &config, source);
+    let view = FrameView {
+        pose,
+        field_of_view_degrees: args.fov.or(saved.map(|v| v.field_of_view_degrees)).unwrap_or(45.0),
+        time_seconds: args.time.or(saved.map(|v| v.time_seconds)).unwrap_or(0.0),
+    };
     match &args.screenshot {
-        Some(out) => screenshot(&args, &world, &config, pose, out),
-        None => open_window(&args, &world, &config, pose),
+        Some(out) => screenshot(&args, &world, &config, &settings, &view, out),
+        None => open_window(&args, &world, &config, settings, &view),
     }
+}
+
+/// `pose` moved where the window lets the camera go (inside the sky box, 0.2 units above the
+/// water and the ground), with a warning naming `source` when it had to move: from under the
+/// water the view is upside down, from outside the sky box it is black.
+fn keep_camera_inside(pose: CameraPose, world: &World, config: &SceneConfig, source: &str) -> CameraPose {
+    let limits = config.camera_limits();
+    let wanted = pose.position;
+    let ground = |x, z| terrain_world::heightfield::height_under(&world.heightmap, config, x, z);
+    let allowed = limits.clamp(wanted, ground);
+    if allowed == wanted {
+        return pose;
+    }
+    let reason = if wanted.x < limits.min.x
+        || wanted.z < limits.min.z
+        || wanted.x > limits.max.x
+        || wanted.z > limits.max.z
+        || wanted.y > limits.max.y
+    {
+        format!(
+            "outside the sky box (the camera stays within x {:.0}..{:.0}, z {:.0}..{:.0}, y up to {:.0})",
+            limits.min.x, limits.max.x, limits.min.z, limits.max.z, limits.max.y
+        )
+    } else if ground(wanted.x, wanted.z).is_some_and(|h| h > limits.min.y && wanted.y < h + limits.clearance)
+    {
+        format!("under the ground or closer to it than {} units", limits.clearance)
+    } else {
+        format!("under the water or closer to it than {} units", limits.clearance)
+    };
+    eprintln!(
+        "warning: {source} puts the camera at {},{},{}, {reason}; moved to {},{},{} as the window would",
+        wanted.x, wanted.y, wanted.z, allowed.x, allowed.y, allowed.z
+    );
+    CameraPose { position: allowed, ..pose }
+}
+
+/// The settings of `--settings` (defaults without it), with `--look` applied. In a window a
+/// file that does not exist yet is fine: the panel's Save creates it.
+fn load_settings(args: &TerrainArgs) -> Result<Settings, String> {
+    let mut settings = match &args.settings {
+        None => Settings::default(),
+        Some(path) if !path.exists() && args.screenshot.is_none() => {
+            eprintln!(
+                "settings: {} does not exist yet; starting from the defaults (the panel's Save, F1, writes it)",
+                path.display()
+            );
+            Settings::default()
+        }
+        Some(path) => Settings::load(path).map_err(|error| error.to_string())?,
+    };
+    if let Some(look) = args.look {
+        settings.look = look;
+    }
+    Ok(settings)
+}
+
+/// Bytes as megabytes, for memory reports.
+fn megabytes(bytes: u64) -> String {
+    format!("{:.1} MB", bytes as f64 / 1e6)
+}
+
+/// Prints what the renderer holds on the GPU (and the CPU), and what a height sample costs.
+fn report_gpu_memory(memory: &GpuMemory, tree_bytes: usize, world: &World) {
+    let samples = u64::from(world.heightmap.columns()) * u64::from(world.heightmap.rows());
+    let per_sample = memory.bytes_per_sample(samples)
+        + world.heightmap.bytes_per_sample() as f64
+        + tree_bytes as f64 / samples as f64;
+    eprintln!(
+        "memory (GPU): {} (height texture {}, static mesh {}, light map {}, textures {}, depth {}); LOD tree {} on the CPU",
+        megabytes(memory.total()),
+        megabytes(memory.heights),
+        megabytes(memory.mesh),
+        megabytes(memory.light_map),
+        megabytes(memory.textures),
+        megabytes(memory.depth),
+        megabytes(tree_bytes as u64),
+    );
+    eprintln!("memory: a height sample costs {per_sample:.2} bytes in all (CPU and GPU)");
 }
 
 /// Why the display could not be opened, for people: winit's message without the location in
@@ -238,20 +357,19 @@ fn load_world(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String>
         );
         return Ok(world);
     }
-    let bar = ProgressBar::new(Stage::ALL.len() as u64);
+    let bar = ProgressBar::new(1000);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} generating the world: {msg} [{pos}/{len}]")
+        ProgressStyle::with_template("{spinner} generating the world: {msg} {percent:>3}% [{elapsed}]")
             .unwrap_or_else(|_| ProgressStyle::default_spinner()),
     );
     bar.enable_steady_tick(Duration::from_millis(100));
-    let mut progress = |stage: Stage| {
-        let done = Stage::ALL.iter().position(|&s| s == stage).unwrap_or(0);
-        bar.set_position(done as u64);
-        bar.set_message(stage.describe());
+    let mut progress = |progress: Progress| {
+        bar.set_position((progress.overall() * 1000.0).round() as u64);
+        bar.set_message(progress.stage.describe());
     };
     let world = match &args.heightmap {
         Some(path) => {
-            progress(Stage::Heightmap);
+            progress(Progress { stage: Stage::Heightmap, done: 0.0 });
             Heightmap::load(path)
                 .map(|heightmap| procedural::dress_heightmap(heightmap, args.seed, config, &mut progress))
                 .map_err(|error| error.to_string())
@@ -298,15 +416,19 @@ fn screenshot(
     args: &TerrainArgs,
     world: &World,
     config: &SceneConfig,
-    pose: CameraPose,
+    settings: &Settings,
+    view: &FrameView,
     out: &Path,
 ) -> Result<(), String> {
     let gpu = open_gpu(args.backend.into())?;
-    let view = FrameView { pose, field_of_view_degrees: args.fov, time_seconds: args.time };
     let started = Instant::now();
-    let image = render_image(&gpu, world, config, args.size, &view).map_err(|error| error.to_string())?;
-    terrain::output::save_frame(&image, out).map_err(|error| error.to_string())?;
-    eprintln!("rendered in {}", seconds(started.elapsed()));
+    let (width, height) = args.size;
+    let mut headless = HeadlessRenderer::new(&gpu, world, config, settings, width, height)
+        .map_err(|error| error.to_string())?;
+    report_gpu_memory(&headless.renderer().gpu_memory(), headless.renderer().cpu_bytes(), world);
+    let image = headless.render(&gpu, view).map_err(|error| error.to_string())?;
+    terrain::output::save_frame(image, out).map_err(|error| error.to_string())?;
+    eprintln!("rendered in {} ({} look)", seconds(started.elapsed()), settings.look.name());
     println!("wrote {} ({}x{})", out.display(), args.size.0, args.size.1);
     Ok(())
 }
@@ -315,21 +437,27 @@ fn open_window(
     args: &TerrainArgs,
     world: &World,
     config: &SceneConfig,
-    pose: CameraPose,
+    settings: Settings,
+    view: &FrameView,
 ) -> Result<(), String> {
     let options = WindowOptions {
         backend: args.backend.into(),
         size: args.size,
-        pose,
-        field_of_view_degrees: args.fov,
-        start_time_seconds: args.time,
+        pose: view.pose,
+        field_of_view_degrees: view.field_of_view_degrees,
+        start_time_seconds: view.time_seconds,
         max_frames: args.frames,
         vsync: !args.no_vsync,
         screenshot_dir: PathBuf::from("."),
+        settings,
+        settings_path: args.settings.clone().unwrap_or_else(|| PathBuf::from(DEFAULT_SETTINGS_FILE)),
     };
     eprint!("controls:\n{}", controls::help());
     let mut notice = |notice: Notice| match notice {
         Notice::Adapter(adapter) => eprintln!("adapter: {adapter}"),
+        Notice::GpuMemory { memory, tree_bytes } => report_gpu_memory(&memory, tree_bytes, world),
+        Notice::SettingsSaved(path) => println!("saved settings {}", path.display()),
+        Notice::SettingsFailed(reason) => eprintln!("settings not saved: {reason}"),
         Notice::ScreenshotSaved(path) => println!("saved screenshot {}", path.display()),
         Notice::ScreenshotFailed(reason) => eprintln!("screenshot failed: {reason}"),
         Notice::MouseCaptured(true) => {

@@ -187,3 +187,138 @@ fn exports_an_asset_folder_that_loads_again() {
     assert!(output.status.success(), "{text}");
     assert!(text.contains("course assets"), "{text}");
 }
+
+#[test]
+fn settings_files_set_the_look_and_the_view() {
+    let settings = scratch("course-view.toml");
+    std::fs::write(
+        &settings,
+        "look = \"course\"\n[view]\nposition = [0.0, 3.0, 12.0]\nyaw_degrees = 0.0\npitch_degrees = -5.0\n\
+         field_of_view_degrees = 45.0\ntime_seconds = 2.0\n",
+    )
+    .expect("write");
+    let (from_file, from_options) = (scratch("from-file.png"), scratch("from-options.png"));
+    let common = ["--size", "48x27", "--grid", "32", "--backend", "vulkan"];
+    let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let mut first = vec!["--settings".to_string(), path(&settings), "--screenshot".into(), path(&from_file)];
+    first.extend(common.iter().map(|s| s.to_string()));
+    let output = rayterra(&first.iter().map(String::as_str).collect::<Vec<_>>());
+    if no_gpu(&output) {
+        return;
+    }
+    let text = stderr(&output);
+    assert!(output.status.success(), "{text}");
+    // The memory is reported, with what a height sample costs.
+    assert!(text.contains("memory (CPU)") && text.contains("memory (GPU)"), "{text}");
+    assert!(text.contains("bytes in all"), "{text}");
+    assert!(text.contains("course look"), "{text}");
+    // The same picture from the command line's look and camera.
+    let mut second = vec!["--look", "course", "--camera", "0,3,12,0,-5", "--time", "2", "--screenshot"];
+    let second_out = path(&from_options);
+    second.push(&second_out);
+    second.extend(common);
+    let output = rayterra(&second);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(std::fs::read(&from_file).expect("first"), std::fs::read(&from_options).expect("second"));
+}
+
+#[test]
+fn bad_settings_are_named() {
+    let out = scratch("never-settings.png");
+    let out_arg = out.to_str().expect("utf-8 path");
+    let bad = scratch("bad.toml");
+    std::fs::write(&bad, "[fog]\ndensty = 0.1\n").expect("write");
+    let output =
+        rayterra(&["--settings", bad.to_str().expect("utf-8 path"), "--screenshot", out_arg, "--grid", "8"]);
+    assert_fails(&output, 1, "bad.toml");
+    assert!(stderr(&output).contains("densty"), "{}", stderr(&output));
+    let missing = scratch("missing-settings.toml");
+    let _ = std::fs::remove_file(&missing);
+    let output = rayterra(&[
+        "--settings",
+        missing.to_str().expect("utf-8 path"),
+        "--screenshot",
+        out_arg,
+        "--grid",
+        "8",
+    ]);
+    assert_fails(&output, 1, "missing-settings.toml");
+    assert_fails(&rayterra(&["--look", "fancy", "--screenshot", out_arg]), 2, "modern");
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_camera_under_the_water_or_outside_the_sky_box_is_moved_inside_with_a_warning() {
+    let common = ["--size", "48x27", "--grid", "32", "--backend", "vulkan", "--look", "course"];
+    let render = |camera: &str, name: &str| {
+        let out = scratch(name);
+        let mut args = vec!["--camera", camera, "--screenshot", out.to_str().expect("utf-8 path")];
+        args.extend(common);
+        (rayterra(&args), out)
+    };
+    for (camera, reason) in [("0,-3,9.5,0,10", "under the water"), ("0,2,500,0,0", "outside the sky box")] {
+        let (output, moved_shot) = render(camera, "camera-moved.png");
+        if no_gpu(&output) {
+            return;
+        }
+        let text = stderr(&output);
+        assert!(output.status.success(), "{text}");
+        assert!(text.contains("warning: --camera") && text.contains(reason), "{text}");
+        // The picture is the one taken from where the warning says the camera went.
+        let moved = text
+            .split("moved to ")
+            .nth(1)
+            .and_then(|rest| rest.split_whitespace().next())
+            .expect("the warning names the new position");
+        let [x, y, z]: [f32; 3] = moved
+            .split(',')
+            .map(|n| n.parse().expect("a number"))
+            .collect::<Vec<_>>()
+            .try_into()
+            .expect("three numbers");
+        let config = terrain::SceneConfig::default();
+        let limits = config.camera_limits();
+        let inside = |v: f32, axis: usize| (limits.min[axis]..=limits.max[axis]).contains(&v);
+        assert!(y >= 0.2 && inside(x, 0) && inside(y, 1) && inside(z, 2), "{moved}");
+        let (output, direct_shot) =
+            render(&format!("{moved},0,{}", camera.rsplit(',').next().expect("pitch")), "camera-direct.png");
+        let direct_text = stderr(&output);
+        assert!(output.status.success(), "{direct_text}");
+        assert!(!direct_text.contains("warning"), "{direct_text}");
+        assert_eq!(
+            std::fs::read(&moved_shot).expect("moved"),
+            std::fs::read(&direct_shot).expect("direct"),
+            "{camera}: not the picture from {moved}"
+        );
+    }
+}
+
+#[test]
+fn running_out_of_memory_is_a_clear_error() {
+    // 8192x8192 pixels need about 1.9 GB; under a 1.5 GB address-space limit the command must
+    // refuse (before or while making the frame) with a message and status 1, not abort or panic.
+    let out = scratch("out-of-memory.png");
+    let _ = std::fs::remove_file(&out);
+    let limited = Command::new("prlimit")
+        .arg("--as=1500000000")
+        .arg(env!("CARGO_BIN_EXE_rayterra"))
+        .args(["terrain", "--grid", "64", "--size", "8192x8192", "--backend", "vulkan", "--screenshot"])
+        .arg(&out)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("XDG_RUNTIME_DIR")
+        .output();
+    let output = match limited {
+        Ok(output) => output,
+        Err(error) => {
+            assert!(!under_ci(), "CI=true, so this cannot be skipped: prlimit: {error}");
+            test_skips::skip("rayterra terrain memory limit", &format!("cannot run prlimit: {error}"));
+            return;
+        }
+    };
+    if no_gpu(&output) {
+        return;
+    }
+    assert_fails(&output, 1, "memory");
+    assert!(!out.exists(), "an image was written");
+}

@@ -1,26 +1,34 @@
 //! Frame-time benchmark: the median time to draw one 1280x720 frame off-screen (drawing and
 //! waiting for the GPU, without reading the image back, as a window would), for the course's
-//! island, the default procedural island and a 2049x2049 procedural heightmap.
+//! island, the default procedural island and procedural islands of 4097 and 8193 samples a side,
+//! in both looks; then, for the course island in the modern look, what each of its features costs
+//! (the frame with one feature switched off, measured in the same rounds).
 //!
 //! Run with `cargo bench -p terrain`. It forces the Vulkan backend (on a machine without a GPU,
 //! Mesa's lavapipe) unless `RAYTERRA_BENCH_BACKEND` names another (`gl`, `metal`, `dx12`,
 //! `auto`). It prints ratios against `benches/frame_time_baseline.txt` when that exists;
-//! `RAYTERRA_BENCH_SAVE=1` rewrites it with this run's medians.
+//! `RAYTERRA_BENCH_SAVE=1` rewrites it with this run's medians. `RAYTERRA_BENCH_QUICK=1` skips
+//! the large maps.
+//!
+//! Variants of one world are measured in interleaved rounds (a few frames of each in turn), so
+//! that a machine shared with other work slows them alike and their ratios stay meaningful.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use terrain::SceneConfig;
 use terrain::headless::HeadlessRenderer;
 use terrain::render::{Backend, FrameView, Gpu};
+use terrain::settings::ReflectionQuality;
 use terrain::world::World;
 use terrain::world::assets::load_course_folder;
 use terrain::world::procedural::{ProceduralOptions, generate};
+use terrain::{Look, SceneConfig, Settings};
 
 const SIZE: (u32, u32) = (1280, 720);
-const WARM_UP_FRAMES: usize = 3;
-const MEASURED_FRAMES: usize = 25;
+const WARM_UP_FRAMES: usize = 2;
+const ROUNDS: usize = 6;
+const FRAMES_PER_ROUND: usize = 4;
 
 fn main() {
     let backend: Backend = std::env::var("RAYTERRA_BENCH_BACKEND")
@@ -35,67 +43,147 @@ fn main() {
     };
     println!("adapter: {}", gpu.describe());
     println!(
-        "frame: {}x{} off-screen, start view, median of {MEASURED_FRAMES} frames after {WARM_UP_FRAMES} warm-up frames",
-        SIZE.0, SIZE.1
+        "frame: {}x{} off-screen, start view, median of {} frames ({ROUNDS} interleaved rounds of {FRAMES_PER_ROUND})",
+        SIZE.0,
+        SIZE.1,
+        ROUNDS * FRAMES_PER_ROUND
     );
     let config = SceneConfig::default();
     let course_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/course-assets/terrain");
-    let mut results = BTreeMap::new();
-    let scenes = [
-        ("course-island-256", Scene::Course),
-        ("procedural-512", Scene::Procedural(512)),
-        ("procedural-2049", Scene::Procedural(2049)),
-    ];
+    let quick = std::env::var("RAYTERRA_BENCH_QUICK").is_ok_and(|v| v == "1");
+    let mut scenes = vec![("course-island-256", Scene::Course), ("procedural-512", Scene::Procedural(512))];
+    if !quick {
+        scenes.extend([
+            ("procedural-4097", Scene::Procedural(4097)),
+            ("procedural-8193", Scene::Procedural(8193)),
+        ]);
+    }
     println!(
-        "{:<20} {:>10} {:>10} {:>10} {:>9} {:>18}",
-        "scene", "median ms", "min ms", "max ms", "setup s", "terrain triangles"
+        "{:<28} {:>10} {:>8} {:>8} {:>9} {:>20}",
+        "scene / look", "median ms", "min ms", "max ms", "setup s", "terrain triangles"
     );
+    let mut results = BTreeMap::new();
     for (name, scene) in scenes {
+        let started = Instant::now();
         let Some(world) = scene.world(&config, &course_dir) else {
             continue;
         };
-        let setup = Instant::now();
-        let mut headless = match HeadlessRenderer::new(&gpu, &world, &config, SIZE.0, SIZE.1) {
-            Ok(headless) => headless,
-            Err(error) => {
-                println!("{name:<20} cannot render: {error}");
-                continue;
-            }
-        };
-        let setup = setup.elapsed();
-        let view = FrameView {
-            pose: config.camera_start,
-            field_of_view_degrees: config.field_of_view_degrees,
-            time_seconds: 0.0,
-        };
-        let mut times: Vec<Duration> = Vec::with_capacity(MEASURED_FRAMES);
-        for frame in 0..WARM_UP_FRAMES + MEASURED_FRAMES {
-            let started = Instant::now();
-            if let Err(error) = headless.draw(&gpu, &view) {
-                println!("{name:<20} failed: {error}");
-                break;
-            }
-            if frame >= WARM_UP_FRAMES {
-                times.push(started.elapsed());
-            }
+        println!("{name}: world ready in {:.1} s", started.elapsed().as_secs_f64());
+        let looks = [("course", Settings::course()), ("modern", Settings::default())];
+        for (look, median) in measure(&gpu, &world, &config, name, &looks) {
+            results.insert(format!("{name}/{look}"), median);
         }
-        if times.is_empty() {
-            continue;
+        if matches!(scene, Scene::Course) {
+            breakdown(&gpu, &world, &config);
         }
-        times.sort();
-        let ms = |d: Duration| d.as_secs_f64() * 1000.0;
-        let median = ms(times[times.len() / 2]);
-        let [direct, mirrored] = headless.renderer().terrain_triangles();
-        println!(
-            "{name:<20} {median:>10.1} {:>10.1} {:>10.1} {:>9.2} {:>18}",
-            ms(times[0]),
-            ms(times[times.len() - 1]),
-            setup.as_secs_f64(),
-            format!("{direct} + {mirrored}"),
-        );
-        results.insert(name.to_string(), median);
     }
     compare_with_baseline(&results);
+}
+
+/// Measures `variants` of `world` in interleaved rounds; prints a line each and returns their
+/// medians in milliseconds.
+fn measure(
+    gpu: &Gpu,
+    world: &World,
+    config: &SceneConfig,
+    scene: &str,
+    variants: &[(&str, Settings)],
+) -> Vec<(String, f64)> {
+    let view = FrameView {
+        pose: config.camera_start,
+        field_of_view_degrees: config.field_of_view_degrees,
+        time_seconds: 0.0,
+    };
+    let setup = Instant::now();
+    let mut headless = match HeadlessRenderer::new(gpu, world, config, &variants[0].1, SIZE.0, SIZE.1) {
+        Ok(headless) => headless,
+        Err(error) => {
+            println!("{scene:<28} cannot render: {error}");
+            return Vec::new();
+        }
+    };
+    let mut setups = vec![Duration::ZERO; variants.len()];
+    let mut times: Vec<Vec<Duration>> = vec![Vec::new(); variants.len()];
+    let mut triangles = vec![[0; 2]; variants.len()];
+    for round in 0..ROUNDS {
+        for (i, (_, settings)) in variants.iter().enumerate() {
+            let switch = Instant::now();
+            let ready = headless.renderer_mut().apply(gpu, world, settings).and_then(|()| {
+                // The first frames of a look upload its resources and draw its light map.
+                let warm_up = if round == 0 { WARM_UP_FRAMES } else { 1 };
+                (0..warm_up).try_for_each(|_| headless.draw(gpu, &view))
+            });
+            if let Err(error) = ready {
+                println!("{scene:<28} failed: {error}");
+                return Vec::new();
+            }
+            if round == 0 {
+                setups[i] = if i == 0 { setup.elapsed() } else { switch.elapsed() };
+            }
+            for _ in 0..FRAMES_PER_ROUND {
+                let started = Instant::now();
+                if let Err(error) = headless.draw(gpu, &view) {
+                    println!("{scene:<28} failed: {error}");
+                    return Vec::new();
+                }
+                times[i].push(started.elapsed());
+            }
+            triangles[i] = headless.renderer().terrain_triangles();
+        }
+    }
+    let ms = |d: Duration| d.as_secs_f64() * 1000.0;
+    variants
+        .iter()
+        .zip(times.iter_mut())
+        .zip(setups.iter().zip(&triangles))
+        .map(|(((name, _), times), (setup, [direct, mirrored]))| {
+            times.sort();
+            let median = ms(times[times.len() / 2]);
+            println!(
+                "{:<28} {median:>10.1} {:>8.1} {:>8.1} {:>9.2} {:>20}",
+                format!("{scene} / {name}"),
+                ms(times[0]),
+                ms(times[times.len() - 1]),
+                setup.as_secs_f64(),
+                format!("{direct} + {mirrored}"),
+            );
+            (name.to_string(), median)
+        })
+        .collect()
+}
+
+/// Where the modern look's time goes on `world`: the frame with each feature switched off, in
+/// the same interleaved rounds as the full frame; the difference is the feature's cost.
+fn breakdown(gpu: &Gpu, world: &World, config: &SceneConfig) {
+    let full = Settings::default();
+    let mut variants = vec![("modern, everything on", full.clone())];
+    let mut with = |name, change: fn(&mut Settings)| {
+        let mut settings = full.clone();
+        change(&mut settings);
+        variants.push((name, settings));
+    };
+    with("no reflection", |s| s.water.reflection = ReflectionQuality::Off);
+    with("quarter reflection", |s| s.water.reflection = ReflectionQuality::Quarter);
+    with("no sea floor", |s| s.water.refraction = false);
+    with("no glint, no foam", |s| {
+        s.water.glint = false;
+        s.water.foam = false;
+    });
+    with("no fog", |s| s.fog.enabled = false);
+    with("unlit", |s| s.sun.lighting = false);
+    with("LOD error 4 px", |s| s.terrain.lod_error_pixels = 4.0);
+    with("course look", |s| s.look = Look::Course);
+    println!("where the modern look's time goes (course island; each line switches one thing off):");
+    let medians = measure(gpu, world, config, "  course-island-256", &variants);
+    if let Some((_, reference)) = medians.first() {
+        for (name, median) in &medians[1..] {
+            println!(
+                "  {name:<26} {:>+8.1} ms ({:.2} of the full frame)",
+                median - reference,
+                median / reference
+            );
+        }
+    }
 }
 
 /// A world to measure.
@@ -134,14 +222,14 @@ fn compare_with_baseline(results: &BTreeMap<String, f64>) {
         println!("no baseline at {} (RAYTERRA_BENCH_SAVE=1 writes one)", path.display());
         return;
     };
-    println!("against the baseline (below 1 is faster):");
+    println!("against the baseline {} (below 1 is faster):", path.display());
     for line in text.lines() {
         let mut parts = line.split_whitespace();
         let (Some(name), Some(Ok(baseline))) = (parts.next(), parts.next().map(str::parse::<f64>)) else {
             continue;
         };
         if let Some(now) = results.get(name) {
-            println!("  {name:<20} {now:>8.1} ms / {baseline:>8.1} ms = {:.2}", now / baseline);
+            println!("  {name:<28} {now:>8.1} ms / {baseline:>8.1} ms = {:.2}", now / baseline);
         }
     }
 }

@@ -217,6 +217,17 @@ impl Limits {
     /// No limits at all.
     pub const NONE: Limits =
         Limits { min: Vec3::splat(f32::NEG_INFINITY), max: Vec3::splat(f32::INFINITY), clearance: 0.0 };
+
+    /// The nearest allowed point to `position`: inside the box and at least `clearance` above
+    /// the ground, `ground(x, z)` giving the terrain height there (`None` off the terrain, where
+    /// the ground is `min.y`). Where the box is too low for the clearance, its ceiling wins.
+    pub fn clamp(&self, position: Vec3, ground: impl Fn(f32, f32) -> Option<f32>) -> Vec3 {
+        let horizontal = position.clamp(self.min, self.max);
+        let floor =
+            ground(horizontal.x, horizontal.z).map_or(self.min.y, |h| h.max(self.min.y)) + self.clearance;
+        let min = Vec3::new(self.min.x, floor.min(self.max.y), self.min.z);
+        position.clamp(min, self.max)
+    }
 }
 
 /// The camera a user flies: pose, field of view, velocity and the keys being held.
@@ -333,9 +344,7 @@ impl FlyCamera {
 
     fn keep_within(&mut self, limits: &Limits, ground: impl Fn(f32, f32) -> Option<f32>) {
         let p = self.pose.position;
-        let floor = ground(p.x, p.z).map_or(limits.min.y, |h| h.max(limits.min.y)) + limits.clearance;
-        let min = Vec3::new(limits.min.x, floor.min(limits.max.y), limits.min.z);
-        let clamped = p.clamp(min, limits.max);
+        let clamped = limits.clamp(p, ground);
         // Stop moving into a wall instead of pressing against it.
         for axis in 0..3 {
             if clamped[axis] != p[axis] {
@@ -532,6 +541,24 @@ mod tests {
         assert_eq!(p.x, 5.0);
         // Off the raised ground, only the water clearance holds it up... once it sinks.
         assert!(p.y >= 0.2 - 1e-6);
+    }
+
+    #[test]
+    fn clamps_points_into_the_box_and_above_the_ground() {
+        let limits =
+            Limits { min: Vec3::new(-5.0, 0.0, -5.0), max: Vec3::new(5.0, 4.0, 11.0), clearance: 0.2 };
+        let hill = |x: f32, _: f32| (x.abs() < 1.0).then_some(1.0);
+        let inside = Vec3::new(2.0, 3.0, 0.0);
+        assert_eq!(limits.clamp(inside, hill), inside);
+        // Under the water, and inside the hill.
+        assert_eq!(limits.clamp(Vec3::new(3.0, -2.0, 0.0), hill), Vec3::new(3.0, 0.2, 0.0));
+        assert_eq!(limits.clamp(Vec3::new(0.5, 0.5, 0.0), hill), Vec3::new(0.5, 1.2, 0.0));
+        // Outside the box: the ground is taken where the point ends up, not where it was.
+        assert_eq!(limits.clamp(Vec3::new(-0.5, 9.0, 50.0), hill), Vec3::new(-0.5, 4.0, 11.0));
+        assert_eq!(
+            limits.clamp(Vec3::new(-30.0, 0.1, 0.0), |x, _| (x > -6.0).then_some(1.0)),
+            Vec3::new(-5.0, 1.2, 0.0)
+        );
     }
 
     #[test]

@@ -21,6 +21,8 @@ pub enum Action {
     Screenshot,
     /// Switch between full screen and a window.
     FullScreen,
+    /// Show or hide the tuning panel.
+    TogglePanel,
     /// Quit.
     Quit,
 }
@@ -38,8 +40,8 @@ pub struct Binding {
     pub effect: &'static str,
 }
 
-/// Every key binding (the spec's controls, plus boost, mouse release, screenshot and full
-/// screen).
+/// Every key binding (the spec's controls, plus boost, mouse release, screenshot, full screen
+/// and the tuning panel).
 pub const BINDINGS: &[Binding] = &[
     Binding {
         keys: &[KeyCode::KeyW],
@@ -96,6 +98,12 @@ pub const BINDINGS: &[Binding] = &[
         effect: "save a screenshot (its file name is printed)",
     },
     Binding { keys: &[KeyCode::F11], names: "F11", action: Action::FullScreen, effect: "full screen" },
+    Binding {
+        keys: &[KeyCode::F1],
+        names: "F1",
+        action: Action::TogglePanel,
+        effect: "show or hide the tuning panel (look, sun, fog, water, level of detail, frame times)",
+    },
     Binding { keys: &[KeyCode::Escape], names: "Esc", action: Action::Quit, effect: "quit" },
 ];
 
@@ -148,6 +156,7 @@ mod tests {
             (KeyCode::Tab, Action::ToggleMouse),
             (KeyCode::F12, Action::Screenshot),
             (KeyCode::KeyP, Action::Screenshot),
+            (KeyCode::F1, Action::TogglePanel),
         ];
         for (key, action) in expected {
             assert_eq!(action_for(key), Some(action), "{key:?}");

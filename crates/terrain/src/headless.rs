@@ -7,6 +7,7 @@ use image::RgbaImage;
 
 use crate::config::SceneConfig;
 use crate::render::{FrameView, Gpu, GpuError, RenderError, Renderer, TEXTURE_FORMAT};
+use crate::settings::Settings;
 use crate::world::World;
 
 /// Checks that `width` x `height` can be rendered on `gpu`: both sides between 1 and the GPU's
@@ -34,25 +35,32 @@ impl OffscreenTarget {
     /// A `width` x `height` target of `format` (8-bit RGBA or BGRA).
     pub fn new(gpu: &Gpu, format: wgpu::TextureFormat, width: u32, height: u32) -> Result<Self, RenderError> {
         check_frame_size(gpu, width, height)?;
-        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("off-screen target"),
-            size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
         let row_bytes = 4 * width;
         let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let padded_row_bytes = row_bytes.div_ceil(align) * align;
-        let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: u64::from(padded_row_bytes) * u64::from(height),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
+        // Per pixel: the target, its read-back buffer, the image read back on the CPU (4 bytes
+        // each), the depth buffer (4), the reflection and its depth (up to 8), and the
+        // rasteriser's own copies on a software GPU (about 4).
+        gpu.reserve("off-screen frame", 28 * u64::from(width) * u64::from(height))?;
+        let (texture, readback) = gpu.scoped("off-screen frame", || {
+            let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("off-screen target"),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let readback = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: u64::from(padded_row_bytes) * u64::from(height),
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            });
+            (texture, readback)
+        })?;
         gpu.check()?;
         Ok(Self {
             view: texture.create_view(&wgpu::TextureViewDescriptor::default()),
@@ -100,7 +108,13 @@ impl OffscreenTarget {
             .recv()
             .map_err(|error| GpuError::Readback(error.to_string()))?
             .map_err(|error| GpuError::Readback(error.to_string()))?;
-        let mut pixels = Vec::with_capacity(4 * width as usize * height as usize);
+        let mut pixels = Vec::new();
+        pixels.try_reserve_exact(4 * width as usize * height as usize).map_err(|_| {
+            GpuError::OutOfMemory {
+                what: format!("{width}x{height} image read back from the GPU"),
+                message: "the system refused the allocation".into(),
+            }
+        })?;
         {
             let mapped =
                 self.readback.get_mapped_range(..).map_err(|error| GpuError::Readback(error.to_string()))?;
@@ -130,17 +144,19 @@ pub struct HeadlessRenderer {
 }
 
 impl HeadlessRenderer {
-    /// Uploads `world` (laid out with `config`) and creates a `width` x `height` target.
+    /// Uploads `world` (laid out with `config`) for the look of `settings` and creates a
+    /// `width` x `height` target.
     pub fn new(
         gpu: &Gpu,
         world: &World,
         config: &SceneConfig,
+        settings: &Settings,
         width: u32,
         height: u32,
     ) -> Result<Self, RenderError> {
         check_frame_size(gpu, width, height)?;
         Ok(Self {
-            renderer: Renderer::new(gpu, world, config, TEXTURE_FORMAT)?,
+            renderer: Renderer::new(gpu, world, config, settings, TEXTURE_FORMAT)?,
             target: OffscreenTarget::new(gpu, TEXTURE_FORMAT, width, height)?,
         })
     }
@@ -148,6 +164,11 @@ impl HeadlessRenderer {
     /// The renderer (e.g. for statistics of the last frame).
     pub fn renderer(&self) -> &Renderer {
         &self.renderer
+    }
+
+    /// The renderer, e.g. to change its settings.
+    pub fn renderer_mut(&mut self) -> &mut Renderer {
+        &mut self.renderer
     }
 
     /// Draws `view` and waits for the GPU to finish, without reading the image back (what a
@@ -166,13 +187,15 @@ impl HeadlessRenderer {
     }
 }
 
-/// Renders one frame of `world` off-screen on `gpu`: the whole headless path in one call.
+/// Renders one frame of `world` off-screen on `gpu` with `settings`: the whole headless path in
+/// one call.
 pub fn render_image(
     gpu: &Gpu,
     world: &World,
     config: &SceneConfig,
+    settings: &Settings,
     (width, height): (u32, u32),
     view: &FrameView,
 ) -> Result<RgbaImage, RenderError> {
-    HeadlessRenderer::new(gpu, world, config, width, height)?.render(gpu, view)
+    HeadlessRenderer::new(gpu, world, config, settings, width, height)?.render(gpu, view)
 }

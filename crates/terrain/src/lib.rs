@@ -4,10 +4,12 @@
 //! - [`world`]: the data to draw (heightmap, textures, sky), loaded or generated. No GPU.
 //! - [`camera`]: the fly camera, a pure state machine fed with input and time.
 //! - [`config`]: the scene's numbers (the course's by default).
+//! - [`settings`]: how a frame looks (the course's look or the modern one, and its tunables).
 //! - [`controls`]: the window's key bindings, in one table.
 //! - [`render`]: the wgpu renderer, drawing into any texture.
 //! - [`headless`]: one frame off-screen, read back as an image.
 //! - [`window`]: the interactive window (winit), using the same renderer.
+//! - [`panel`]: the window's tuning panel (egui, F1).
 //!
 //! The library never prints, exits or parses command lines: it returns values and typed errors.
 
@@ -16,8 +18,11 @@ pub mod config;
 pub mod controls;
 pub mod headless;
 pub mod output;
+pub mod panel;
 pub mod render;
+pub mod settings;
 pub mod window;
 pub mod world;
 
 pub use config::SceneConfig;
+pub use settings::{Look, Settings};

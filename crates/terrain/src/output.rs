@@ -21,6 +21,9 @@ pub enum SaveError {
     /// The file could not be written (missing folder, no permission, disk full, encoder error).
     #[error(transparent)]
     File(#[from] atomic_file::WriteError<image::ImageError>),
+    /// A file of bytes (such as settings) could not be written.
+    #[error(transparent)]
+    Bytes(#[from] atomic_file::WriteError<std::io::Error>),
     /// The file name's extension names no image format this program writes.
     #[error("cannot tell which image format to write for {}: use .png, .bmp or .jpg", path.display())]
     UnknownFormat {
@@ -41,15 +44,16 @@ pub fn format_for(path: &Path) -> Result<ImageFormat, SaveError> {
 /// format and its folder exists and takes a new file. Nothing is left behind.
 pub fn check_output(path: &Path) -> Result<ImageFormat, SaveError> {
     let format = format_for(path)?;
-    atomic_file::check_writable(path)?;
+    atomic_file::check_writable::<image::ImageError>(path)?;
     Ok(format)
 }
 
 /// Writes a rendered frame to `path` in the format its extension names (PNG keeps the alpha
-/// channel; BMP and JPEG are written as RGB), atomically.
-pub fn save_frame(frame: &image::RgbaImage, path: &Path) -> Result<(), SaveError> {
+/// channel; BMP and JPEG are written as RGB), atomically. Takes the frame, so that a large one
+/// is not copied.
+pub fn save_frame(frame: image::RgbaImage, path: &Path) -> Result<(), SaveError> {
     let format = format_for(path)?;
-    let image = DynamicImage::ImageRgba8(frame.clone());
+    let image = DynamicImage::ImageRgba8(frame);
     let image = match format {
         ImageFormat::Png => image,
         _ => DynamicImage::ImageRgb8(image.into_rgb8()),
@@ -61,6 +65,12 @@ pub fn save_frame(frame: &image::RgbaImage, path: &Path) -> Result<(), SaveError
 /// beside `path`, which is then renamed over it.
 pub fn save_image(image: &DynamicImage, path: &Path, format: ImageFormat) -> Result<(), SaveError> {
     atomic_file::write_atomically(path, |writer| image.write_to(writer, format))?;
+    Ok(())
+}
+
+/// Writes `bytes` to `path`, atomically like [`save_image`].
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), SaveError> {
+    atomic_file::write_atomically(path, |writer| std::io::Write::write_all(writer, bytes))?;
     Ok(())
 }
 
@@ -128,7 +138,7 @@ mod tests {
         std::fs::create_dir_all(&dir).expect("temp dir");
         let frame = image::RgbaImage::from_pixel(4, 3, image::Rgba([200, 100, 50, 255]));
         for name in ["f.png", "f.bmp", "f.jpg"] {
-            save_frame(&frame, &dir.join(name)).expect("writable");
+            save_frame(frame.clone(), &dir.join(name)).expect("writable");
             let back = image::open(dir.join(name)).expect("readable").into_rgb8();
             let pixel = back.get_pixel(1, 1).0;
             assert!((i32::from(pixel[0]) - 200).abs() < 8, "{name}: {pixel:?}");

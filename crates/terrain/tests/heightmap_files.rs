@@ -96,11 +96,11 @@ fn the_course_heightmap_is_a_palettised_bmp() {
     };
     let map = Heightmap::load(&dir.join("heightmap.bmp")).expect("loads");
     assert_eq!((map.columns(), map.rows()), (256, 256));
-    assert!(map.levels().iter().all(|level| level.fract() == 0.0));
-    let mean = map.levels().iter().sum::<f32>() / map.levels().len() as f32;
+    assert!(map.levels().all(|level| level.fract() == 0.0));
+    let mean = map.levels().sum::<f32>() / map.levels().len() as f32;
     // Its grey levels (read independently with another decoder) average 131.727, range 0..251.
     assert!((mean - 131.727).abs() < 0.01, "mean {mean}");
-    let highest = map.levels().iter().copied().fold(0.0, f32::max);
+    let highest = map.levels().fold(0.0, f32::max);
     assert_eq!(highest, 251.0);
 }
 
@@ -118,7 +118,7 @@ fn fuzz_inputs_load_or_fail_cleanly() {
             let loaded = Heightmap::decode(&bytes, &entry.path().display().to_string());
             if kind == "seeds" {
                 let map = loaded.unwrap_or_else(|e| panic!("a seed must load: {e}"));
-                assert!(map.levels().iter().all(|l| l.is_finite()));
+                assert!(map.levels().all(|l| l.is_finite()));
             }
             count += 1;
         }

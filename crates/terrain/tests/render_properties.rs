@@ -6,9 +6,9 @@ mod common;
 
 use common::{gpu, marker_world, project, render, view_from};
 use image::{Rgba, RgbaImage};
-use terrain::SceneConfig;
 use terrain::headless::OffscreenTarget;
 use terrain::render::{Backend, Renderer};
+use terrain::{SceneConfig, Settings};
 
 const SIZE: (u32, u32) = (160, 96);
 
@@ -140,10 +140,32 @@ fn a_bgra_target_reads_back_as_rgba() {
     let view = view_from([-8.0, 1.5, 6.0], 120.0, -12.0);
     let expected = render(gpu, &world, SIZE, &view);
     let format = wgpu::TextureFormat::Bgra8Unorm;
-    let mut renderer = Renderer::new(gpu, &world, &SceneConfig::default(), format).expect("renderer");
+    let mut renderer =
+        Renderer::new(gpu, &world, &SceneConfig::default(), &Settings::course(), format).expect("renderer");
     let target = OffscreenTarget::new(gpu, format, SIZE.0, SIZE.1).expect("target");
     renderer.draw(gpu, target.view(), SIZE, &view);
     let image = target.read(gpu).expect("read back");
     let (d, _) = common::difference(&image, &expected);
     assert!(d.worst <= 1, "{d:?}");
+}
+
+#[test]
+fn what_the_gpu_refuses_is_an_error_naming_it_not_a_panic() {
+    let Some(gpu) = gpu(Backend::Vulkan) else { return };
+    // Larger than any buffer the device allows: wgpu's default error handler would panic.
+    let too_large = gpu.device.limits().max_buffer_size.saturating_add(4);
+    let made = gpu.scoped("test buffer", || {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("too large"),
+            size: too_large,
+            usage: wgpu::BufferUsages::VERTEX,
+            mapped_at_creation: false,
+        })
+    });
+    let error = made.expect_err("an impossible buffer was made").to_string();
+    assert!(error.contains("test buffer"), "{error}");
+    // The scope took the error: nothing is left for the next check.
+    assert!(gpu.check().is_ok());
+    // Without a problem the result comes through.
+    assert_eq!(gpu.scoped("nothing", || 7).expect("no error"), 7);
 }

@@ -1,15 +1,17 @@
-//! One frame: the passes in the course's order, into any colour target.
+//! One frame: the camera's uniforms, the choice of what to draw, then the look's passes, into
+//! any colour target.
 
-use super::uniforms::FrameUniforms;
-use super::{DepthBuffer, Renderer};
 use glam::Mat4;
 
+use super::Renderer;
+use super::grid::GridPass;
+use super::reflection::ReflectionTarget;
+use super::texture::DepthBuffer;
+use super::uniforms::FrameUniforms;
 use crate::camera::{CameraPose, Frustum, Lens};
+use crate::settings::Look;
 use crate::world::mesh::LodView;
-
-/// Largest on-screen error, in pixels, that the terrain's level of detail may introduce: two
-/// pixels of vertical shift, which does not show as the camera moves.
-pub const LOD_ERROR_PIXELS: f32 = 2.0;
+use crate::world::quadtree::TreeView;
 
 /// What a frame shows: where the camera is, its field of view, and the time (which moves the
 /// water).
@@ -30,67 +32,116 @@ impl FrameView {
         let lens = Lens { field_of_view_degrees: self.field_of_view_degrees, near, far };
         lens.projection(aspect) * self.pose.view_matrix()
     }
+
+    /// Pixels covered by one world unit seen face-on at a distance of one unit, for a target
+    /// `height` pixels high.
+    pub fn pixels_per_unit(&self, height: u32) -> f32 {
+        height.max(1) as f32 / (2.0 * (self.field_of_view_degrees.to_radians() / 2.0).tan())
+    }
+}
+
+/// What the last frame drew.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FrameStats {
+    /// Triangles of terrain in the direct and the mirrored (or reflected) pass, skirts included.
+    pub terrain_triangles: [u64; 2],
+    /// Whether the shadow map was drawn again (the sun moved).
+    pub shadow_map_drawn: bool,
+}
+
+/// Begins the frame's pass into `target` and `depth`, both cleared.
+pub(super) fn begin_pass<'a>(
+    encoder: &'a mut wgpu::CommandEncoder,
+    label: &str,
+    target: &'a wgpu::TextureView,
+    depth: &'a wgpu::TextureView,
+) -> wgpu::RenderPass<'a> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 impl Renderer {
-    /// Draws `view` into `target` (of this renderer's format and `size` pixels) and submits the
-    /// work. Drawing order: sky, mirrored sky, terrain, mirrored terrain, water. GPU errors are
-    /// collected by the [`super::Gpu`]; check them with [`super::Gpu::check`].
+    /// Draws `view` into `target` (of this renderer's format and `size` pixels) in the look of
+    /// its settings, and submits the work. GPU errors are collected by the [`super::Gpu`]; check
+    /// them with [`super::Gpu::check`].
     pub fn draw(&mut self, gpu: &super::Gpu, target: &wgpu::TextureView, size: (u32, u32), view: &FrameView) {
         let config = &self.config;
         let aspect = size.0.max(1) as f32 / size.1.max(1) as f32;
         let view_projection = view.view_projection(aspect, config.near, config.far);
         let water_offset = config.water_offset(view.time_seconds);
         let frustum = Frustum::from_view_projection(view_projection);
-        let lod = |mirrored| LodView {
-            eye: view.pose.position,
-            frustum,
-            pixels_per_unit: size.1.max(1) as f32
-                / (2.0 * (view.field_of_view_degrees.to_radians() / 2.0).tan()),
-            max_error_pixels: LOD_ERROR_PIXELS,
-            mirrored,
-        };
-        self.land.prepare(&gpu.queue, [&lod(false), &lod(true)]);
+        let eye = view.pose.position;
         for (mirrored, buffer) in [false, true].into_iter().zip(&self.frame_buffers) {
-            let uniforms = FrameUniforms::new(view_projection, mirrored, water_offset);
+            let uniforms = FrameUniforms::new(view_projection, mirrored, water_offset, eye);
             gpu.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&uniforms));
         }
+        let max_error_pixels = self.settings.terrain.lod_error_pixels;
+        let pixels_per_unit = view.pixels_per_unit(size.1);
+        // The mirrored pass of the modern look draws into the smaller reflection.
+        let mirrored_scale = match self.settings.look {
+            Look::Course => 1.0,
+            Look::Modern => self.settings.water.reflection.scale(),
+        };
+        let mut stats = FrameStats::default();
+        if let Some(land) =
+            self.course.as_mut().filter(|_| self.settings.look == Look::Course).and_then(|c| c.mesh())
+        {
+            let lod = |mirrored| LodView { eye, frustum, pixels_per_unit, max_error_pixels, mirrored };
+            land.prepare(&gpu.queue, [&lod(false), &lod(true)]);
+            stats.terrain_triangles = land.triangles_chosen();
+        } else if let Some(grid) = &mut self.grid {
+            let tree_view = |mirrored: bool, scale: f32| TreeView {
+                eye,
+                frustum,
+                pixels_per_unit: pixels_per_unit * scale,
+                max_error_pixels,
+                mirrored,
+                orthographic: false,
+            };
+            grid.prepare(&gpu.device, &gpu.queue, GridPass::Direct, &tree_view(false, 1.0));
+            stats.terrain_triangles[0] = grid.triangles(GridPass::Direct);
+            if mirrored_scale > 0.0 {
+                let scale = if self.settings.look == Look::Modern {
+                    ReflectionTarget::size_for(size, mirrored_scale).1 as f32 / size.1.max(1) as f32
+                } else {
+                    1.0
+                };
+                grid.prepare(&gpu.device, &gpu.queue, GridPass::Mirrored, &tree_view(true, scale));
+                stats.terrain_triangles[1] = grid.triangles(GridPass::Mirrored);
+            }
+        }
+        let shadow = self.settings.look == Look::Modern && self.prepare_modern(gpu, size, view.time_seconds);
+        stats.shadow_map_drawn = shadow;
+        self.stats = stats;
         if self.depth.as_ref().map(DepthBuffer::size) != Some(size) {
             self.depth = Some(DepthBuffer::new(&gpu.device, size));
         }
-        let Some(depth) = &self.depth else { return };
         let mut encoder =
             gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("scene"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: depth.view(),
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            let [direct, mirrored] = &self.frame_groups;
-            self.sky.draw(&mut pass, direct, false);
-            self.sky.draw(&mut pass, mirrored, true);
-            self.land.draw(&mut pass, direct, false);
-            self.land.draw(&mut pass, mirrored, true);
-            self.water.draw(&mut pass, direct);
+        match self.settings.look {
+            Look::Course => self.draw_course(&mut encoder, target),
+            Look::Modern => self.draw_modern(&mut encoder, target, shadow),
         }
         gpu.queue.submit([encoder.finish()]);
     }

@@ -9,6 +9,8 @@ struct Frame {
     padding: f32,
     // The water texture's offset, in texture repeats.
     water_offset: vec2<f32>,
+    // The camera's position (world), w: unused.
+    eye: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;

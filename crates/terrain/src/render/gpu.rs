@@ -91,6 +91,32 @@ pub enum GpuError {
         /// The errors, in the order they happened.
         messages: Vec<String>,
     },
+    /// The GPU ran out of memory creating or filling something.
+    #[error("the GPU ran out of memory for the {what}: {message}{}", advice())]
+    OutOfMemory {
+        /// What was being made.
+        what: String,
+        /// What wgpu said.
+        message: String,
+    },
+    /// What a world needs does not fit in the memory at hand, checked before it is made.
+    #[error(
+        "the {what} needs about {} but only {} {}{}",
+        megabytes(*needed),
+        megabytes(*available),
+        where_from,
+        advice()
+    )]
+    NotEnoughMemory {
+        /// What would be made.
+        what: String,
+        /// Bytes it needs.
+        needed: u64,
+        /// Bytes at hand.
+        available: u64,
+        /// Which limit gives `available` (e.g. "are free in the address space (ulimit -v)").
+        where_from: String,
+    },
     /// The device could not finish its work.
     #[error("waiting for the GPU failed: {0}")]
     Poll(#[from] wgpu::PollError),
@@ -148,9 +174,11 @@ impl Gpu {
             apply_limit_buckets: false,
         }))
         .map_err(|error| GpuError::NoAdapter { backend, reason: error.to_string() })?;
+        // Wireframe where the GPU can draw lines (the tuning panel's switch).
+        let optional = wgpu::Features::POLYGON_MODE_LINE;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("rayterra terrain"),
-            required_features: wgpu::Features::empty(),
+            required_features: adapter.features() & optional,
             required_limits: adapter.limits(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -177,6 +205,11 @@ impl Gpu {
         describe(&self.adapter.get_info())
     }
 
+    /// Whether the device can draw the terrain's triangle edges (wireframe).
+    pub fn has_wireframe(&self) -> bool {
+        self.device.features().contains(wgpu::Features::POLYGON_MODE_LINE)
+    }
+
     /// Whether the adapter is a software rasteriser (e.g. Mesa's lavapipe or llvmpipe).
     pub fn is_software(&self) -> bool {
         self.adapter.get_info().device_type == wgpu::DeviceType::Cpu
@@ -191,11 +224,62 @@ impl Gpu {
         if messages.is_empty() { Ok(()) } else { Err(GpuError::Reported { messages }) }
     }
 
+    /// Runs `make` (creating and filling GPU resources for the `what`) inside error scopes, so
+    /// that running out of memory, or anything the device refuses, becomes an error naming
+    /// `what` instead of an invalid resource that fails (or panics) when it is first used.
+    pub fn scoped<T>(&self, what: &str, make: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
+        let memory = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let made = make();
+        // Scopes pop in the reverse order of their pushing.
+        let memory = pollster::block_on(memory.pop());
+        let internal = pollster::block_on(internal.pop());
+        let validation = pollster::block_on(validation.pop());
+        match (memory, internal, validation) {
+            (Some(error), _, _) => {
+                Err(GpuError::OutOfMemory { what: what.to_string(), message: error.to_string() })
+            }
+            (None, Some(error), _) | (None, None, Some(error)) => {
+                Err(GpuError::Reported { messages: vec![format!("making the {what}: {error}")] })
+            }
+            (None, None, None) => Ok(made),
+        }
+    }
+
+    /// Checks that `bytes` more for the `what` fit in the memory at hand. A software adapter
+    /// (lavapipe, llvmpipe) keeps its "GPU" memory in this process, so there the memory the
+    /// system has free and the room left under the address-space limit (`ulimit -v`) are
+    /// checked; a hardware GPU's own memory cannot be queried portably, and is left to the
+    /// error scopes of [`Gpu::scoped`].
+    pub fn reserve(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
+        if !self.is_software() {
+            return Ok(());
+        }
+        match super::memory::at_hand() {
+            Some((available, where_from)) if bytes > available => Err(GpuError::NotEnoughMemory {
+                what: what.to_string(),
+                needed: bytes,
+                available,
+                where_from: where_from.to_string(),
+            }),
+            _ => Ok(()),
+        }
+    }
+
     /// Blocks until the GPU has finished all submitted work, then reports its errors.
     pub fn finish(&self) -> Result<(), GpuError> {
         self.device.poll(wgpu::PollType::wait_indefinitely())?;
         self.check()
     }
+}
+
+fn megabytes(bytes: u64) -> String {
+    format!("{:.0} MB", bytes as f64 / 1e6)
+}
+
+fn advice() -> &'static str {
+    "; try a smaller heightmap (--grid, --heightmap), a smaller --size, or close other programs"
 }
 
 fn describe(info: &wgpu::AdapterInfo) -> String {

@@ -11,7 +11,7 @@ use super::pipeline::{
 };
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
-use crate::world::mesh::{DrawRange, LodView};
+use crate::world::mesh::{DrawRange, EDGE_COUNT, LodView};
 use crate::world::{Heightfield, TerrainMesh, World};
 
 /// Bytes of one indirect draw's arguments.
@@ -26,10 +26,44 @@ struct LandUniforms {
     padding: f32,
 }
 
+/// The most draws one pass can make: a surface and four skirt strips per chunk.
+fn max_draws(mesh: &TerrainMesh) -> u64 {
+    (mesh.chunks.len() as u64 * (1 + EDGE_COUNT as u64)).max(1)
+}
+
+/// The land's pipelines, filling triangles or drawing their edges.
+fn land_pipelines(
+    context: &PassContext<'_>,
+    layout: &wgpu::BindGroupLayout,
+    polygon_mode: wgpu::PolygonMode,
+) -> PipelinePair {
+    let attributes = wgpu::vertex_attr_array![0 => Float32x3];
+    let buffers = [wgpu::VertexBufferLayout {
+        array_stride: size_of::<[f32; 3]>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &attributes,
+    }];
+    let layouts = [layout];
+    pipelines(
+        context,
+        &PipelineSpec {
+            polygon_mode,
+            ..PipelineSpec::new("land", shader_source!("land.wgsl"), &layouts, &buffers)
+        },
+    )
+}
+
 /// The terrain's GPU resources.
 #[derive(Debug)]
 pub struct LandPass {
     pipelines: PipelinePair,
+    layout: wgpu::BindGroupLayout,
+    /// Pipelines drawing the triangles' edges, once asked for.
+    wireframe: Option<PipelinePair>,
+    /// Draw the edges (when the GPU can).
+    show_wireframe: bool,
+    /// GPU memory of the mesh and of its textures, in bytes.
+    gpu_bytes: (u64, u64),
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
@@ -93,38 +127,45 @@ impl LandPass {
                 Binding::Sampler(&sampler(device, true)),
             ],
         );
-        let attributes = wgpu::vertex_attr_array![0 => Float32x3];
-        let pipelines = pipelines(
-            context,
-            &PipelineSpec {
-                label: "land",
-                source: shader_source!("land.wgsl"),
-                layout: &layout,
-                vertex_stride: size_of::<[f32; 3]>() as u64,
-                attributes: &attributes,
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                strip_index_format: None,
-                blend: false,
-            },
-        );
-        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("land vertices"),
-            contents: bytemuck::cast_slice(&mesh.positions),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("land indices"),
-            contents: bytemuck::cast_slice(&mesh.indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
+        let pipelines = land_pipelines(context, &layout, wgpu::PolygonMode::Fill);
+        let texture_bytes = |image: &image::RgbaImage| image.as_raw().len() as u64 * 4 / 3;
+        let gpu_bytes =
+            (vertex_bytes + index_bytes, texture_bytes(&world.colour_map) + texture_bytes(&world.detail_map));
+        // Created empty and filled through the queue (not mapped at creation): a buffer the GPU
+        // has no memory for is then reported by the caller's error scope instead of panicking
+        // when its mapping is written.
+        let filled = |label, contents: &[u8], usage| {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (contents.len() as u64).next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT),
+                usage: usage | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            // Whole words straight from the mesh, then the last bytes padded to a word.
+            let whole = contents.len() / 4 * 4;
+            queue.write_buffer(&buffer, 0, &contents[..whole]);
+            if whole < contents.len() {
+                let mut tail = [0u8; 4];
+                tail[..contents.len() - whole].copy_from_slice(&contents[whole..]);
+                queue.write_buffer(&buffer, whole as u64, &tail);
+            }
+            buffer
+        };
+        let vertices =
+            filled("land vertices", bytemuck::cast_slice(&mesh.positions), wgpu::BufferUsages::VERTEX);
+        let indices = filled("land indices", bytemuck::cast_slice(&mesh.indices), wgpu::BufferUsages::INDEX);
         let indirect = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("land draws"),
-            size: 2 * INDIRECT_ARGS_SIZE * mesh.chunks.len().max(1) as u64,
+            size: 2 * INDIRECT_ARGS_SIZE * max_draws(&mesh),
             usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         Ok(Self {
             pipelines,
+            layout,
+            wireframe: None,
+            show_wireframe: false,
+            gpu_bytes,
             vertices,
             indices,
             bind_group,
@@ -158,7 +199,7 @@ impl LandPass {
     }
 
     fn slot_offset(&self, slot: usize) -> u64 {
-        slot as u64 * INDIRECT_ARGS_SIZE * self.chunks.chunks.len() as u64
+        slot as u64 * INDIRECT_ARGS_SIZE * max_draws(&self.chunks)
     }
 
     /// Draws the terrain, or its mirror image, with the chunks chosen by [`Self::prepare`]: one
@@ -169,7 +210,11 @@ impl LandPass {
         if chosen.is_empty() {
             return;
         }
-        pass.set_pipeline(self.pipelines.get(mirrored));
+        let pipelines = match (&self.wireframe, self.show_wireframe) {
+            (Some(wireframe), true) => wireframe,
+            _ => &self.pipelines,
+        };
+        pass.set_pipeline(pipelines.get(mirrored));
         pass.set_bind_group(0, frame, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, self.vertices.slice(..));
@@ -182,6 +227,23 @@ impl LandPass {
                 pass.draw_indexed(indices, range.base_vertex as i32, 0..1);
             }
         }
+    }
+
+    /// Draws the triangles' edges (`on`) or their faces. The edges need the GPU's
+    /// `POLYGON_MODE_LINE` feature: without it this does nothing.
+    pub fn set_wireframe(&mut self, context: &PassContext<'_>, on: bool) {
+        if on
+            && self.wireframe.is_none()
+            && context.device.features().contains(wgpu::Features::POLYGON_MODE_LINE)
+        {
+            self.wireframe = Some(land_pipelines(context, &self.layout, wgpu::PolygonMode::Line));
+        }
+        self.show_wireframe = on;
+    }
+
+    /// GPU memory of the mesh and of its textures, in bytes.
+    pub fn gpu_bytes(&self) -> (u64, u64) {
+        self.gpu_bytes
     }
 
     /// Triangles drawn by the direct and mirrored passes of the current frame (skirts included).

@@ -1,26 +1,41 @@
 //! The wgpu renderer. It draws a [`World`] into any texture view (a window's surface or an
-//! off-screen texture) in the course's order: sky, mirrored sky, terrain, mirrored terrain, then
-//! the translucent water. Each of these is one draw call, whatever the heightmap's size.
+//! off-screen texture) in one of two looks ([`crate::settings::Look`]): the course's (sky, land
+//! and their mirror images under translucent water, exactly as the course drew them) or the
+//! modern one (sun light, shadows, fog, and water that reflects and refracts). Each pass is a
+//! handful of draw calls, whatever the heightmap's size.
 
+mod course;
 mod frame;
 mod gpu;
+mod grid;
 mod land;
+mod light_map;
+mod lighting;
+mod memory;
+mod modern;
 mod pipeline;
+mod reflection;
+mod sea;
+mod shadow;
 mod sky;
 mod texture;
 mod uniforms;
 mod water;
 
-pub use frame::FrameView;
+pub use course::MESH_MAX_SIDE;
+pub use frame::{FrameStats, FrameView};
 pub use gpu::{Backend, Gpu, GpuError};
+pub use lighting::SHADOW_MAP_SIZE;
 pub use texture::TEXTURE_FORMAT;
 
-use land::LandPass;
-use sky::SkyPass;
+use course::CourseLook;
+use grid::GridTerrain;
+use modern::ModernLook;
+use pipeline::PassContext;
 use texture::DepthBuffer;
-use water::WaterPass;
 
 use crate::config::SceneConfig;
+use crate::settings::{Look, Settings};
 use crate::world::World;
 
 /// Why the renderer could not be built or could not draw.
@@ -66,32 +81,66 @@ pub enum RenderError {
 }
 
 /// Everything on the GPU needed to draw one world: pipelines, meshes, textures and the depth
-/// buffer.
+/// buffer, for the looks used so far.
 #[derive(Debug)]
 pub struct Renderer {
     config: SceneConfig,
+    settings: Settings,
     target_format: wgpu::TextureFormat,
-    /// Uniforms of the direct pass (index 0) and the mirrored pass (index 1).
-    frame_buffers: [wgpu::Buffer; 2],
-    frame_groups: [wgpu::BindGroup; 2],
-    sky: SkyPass,
-    land: LandPass,
-    water: WaterPass,
+    frame_layout: wgpu::BindGroupLayout,
+    /// Uniforms of the direct pass (index 0), the mirrored pass (1) and the sun's view (2).
+    frame_buffers: [wgpu::Buffer; 3],
+    frame_groups: [wgpu::BindGroup; 3],
+    multi_draw: bool,
+    /// The heightmap as a GPU grid (the modern look, and the course's on large maps).
+    grid: Option<GridTerrain>,
+    course: Option<CourseLook>,
+    modern: Option<ModernLook>,
     depth: Option<DepthBuffer>,
+    stats: FrameStats,
+}
+
+/// GPU memory a renderer holds, in bytes, by what it is for.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct GpuMemory {
+    /// The heightmap's texture (the grid: 2 bytes a sample) and its patch mesh.
+    pub heights: u64,
+    /// The course look's static mesh (maps up to [`MESH_MAX_SIDE`]).
+    pub mesh: u64,
+    /// The modern look's light map (with its mip levels).
+    pub light_map: u64,
+    /// Colour, detail and sky textures, wave maps, the shadow map and the reflection.
+    pub textures: u64,
+    /// The frame's depth buffer.
+    pub depth: u64,
+}
+
+impl GpuMemory {
+    /// All of it.
+    pub fn total(&self) -> u64 {
+        self.heights + self.mesh + self.light_map + self.textures + self.depth
+    }
+
+    /// What the terrain's geometry and light cost per height sample (`samples` of them), in
+    /// bytes: the height texture, the mesh and the light map.
+    pub fn bytes_per_sample(&self, samples: u64) -> f64 {
+        (self.heights + self.mesh + self.light_map) as f64 / samples.max(1) as f64
+    }
 }
 
 impl Renderer {
-    /// Uploads `world` laid out with `config`, for drawing into targets of `target_format`.
-    /// Reports GPU errors (e.g. out of memory) as errors, not panics.
+    /// Uploads `world` laid out with `config` for the look `settings` asks for, to draw into
+    /// targets of `target_format`. Reports GPU errors (e.g. out of memory) as errors, not panics.
     pub fn new(
         gpu: &Gpu,
         world: &World,
         config: &SceneConfig,
+        settings: &Settings,
         target_format: wgpu::TextureFormat,
     ) -> Result<Self, RenderError> {
         let device = &gpu.device;
         let frame_layout = uniforms::frame_layout(device);
-        let frame_buffers = [0, 1].map(|_| {
+        let frame_buffers = [0, 1, 2].map(|_| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame uniforms"),
                 size: size_of::<uniforms::FrameUniforms>() as u64,
@@ -99,9 +148,9 @@ impl Renderer {
                 mapped_at_creation: false,
             })
         });
-        let frame_groups = [0, 1].map(|i| {
+        let frame_groups = [0, 1, 2].map(|i| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(if i == 0 { "frame" } else { "frame (mirrored)" }),
+                label: Some(["frame", "frame (mirrored)", "frame (sun)"][i]),
                 layout: &frame_layout,
                 entries: &[wgpu::BindGroupEntry {
                     binding: 0,
@@ -109,24 +158,85 @@ impl Renderer {
                 }],
             })
         });
-        let context =
-            pipeline::PassContext { device, queue: &gpu.queue, frame_layout: &frame_layout, target_format };
         let multi_draw =
             gpu.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
-        let sky = SkyPass::new(&context, &world.sky, config)?;
-        let land = LandPass::new(&context, world, config, multi_draw)?;
-        let water = WaterPass::new(&context, &world.water, config)?;
-        gpu.check()?;
-        Ok(Self {
+        let mut renderer = Self {
             config: config.clone(),
+            settings: settings.clone(),
             target_format,
+            frame_layout,
             frame_buffers,
             frame_groups,
-            sky,
-            land,
-            water,
+            multi_draw,
+            grid: None,
+            course: None,
+            modern: None,
             depth: None,
-        })
+            stats: FrameStats::default(),
+        };
+        renderer.apply(gpu, world, settings)?;
+        Ok(renderer)
+    }
+
+    /// Switches to `settings`, uploading what a look used for the first time needs of `world`
+    /// (the world the renderer was made with).
+    pub fn apply(&mut self, gpu: &Gpu, world: &World, settings: &Settings) -> Result<(), RenderError> {
+        let context = PassContext {
+            device: &gpu.device,
+            queue: &gpu.queue,
+            frame_layout: &self.frame_layout,
+            target_format: self.target_format,
+        };
+        let side = world.heightmap.columns().max(world.heightmap.rows());
+        let samples = u64::from(world.heightmap.columns()) * u64::from(world.heightmap.rows());
+        let needs_grid = settings.look == Look::Modern || side > MESH_MAX_SIDE;
+        if needs_grid && self.grid.is_none() {
+            // The height texture (2 bytes a sample) and the level-of-detail tree's bounds.
+            gpu.reserve("heightmap on the GPU", samples * 2 + samples / 4)?;
+            let grid = gpu.scoped("heightmap on the GPU", || {
+                GridTerrain::new(&context, &world.heightmap, &self.config)
+            })??;
+            self.grid = Some(grid);
+        }
+        match settings.look {
+            Look::Course if self.course.is_none() => {
+                let grid = (side > MESH_MAX_SIDE).then_some(self.grid.as_ref()).flatten();
+                if grid.is_none() {
+                    // The static mesh: positions (12 bytes) and indices (2 bytes, about 6 a
+                    // sample) at every level of detail (a third more), and its build on the CPU.
+                    gpu.reserve("terrain mesh", samples * (12 + 12) * 4 / 3 * 2)?;
+                }
+                let course = gpu.scoped("course look's terrain and textures", || {
+                    CourseLook::new(&context, world, &self.config, self.multi_draw, grid)
+                })??;
+                self.course = Some(course);
+            }
+            Look::Modern if self.modern.is_none() => {
+                if let Some(grid) = &self.grid {
+                    let modern = gpu
+                        .scoped("modern look's light map, shadow map, reflection and textures", || {
+                            ModernLook::new(&context, world, &self.config, grid)
+                        })??;
+                    self.modern = Some(modern);
+                }
+            }
+            _ => {}
+        }
+        let wireframe = settings.terrain.wireframe;
+        if let Some(course) = &mut self.course {
+            course.set_wireframe(&context, wireframe);
+        }
+        if let Some(modern) = &mut self.modern {
+            modern.set_wireframe(&context, wireframe);
+        }
+        self.settings = settings.clone();
+        gpu.check()?;
+        Ok(())
+    }
+
+    /// The settings the renderer draws with.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
     }
 
     /// The colour format this renderer draws into.
@@ -134,9 +244,32 @@ impl Renderer {
         self.target_format
     }
 
+    /// What the last frame drew.
+    pub fn stats(&self) -> FrameStats {
+        self.stats
+    }
+
     /// Triangles of terrain the last frame drew in its direct and mirrored passes.
     pub fn terrain_triangles(&self) -> [u64; 2] {
-        self.land.triangles_chosen()
+        self.stats.terrain_triangles
+    }
+
+    /// GPU memory held for the looks used so far.
+    pub fn gpu_memory(&self) -> GpuMemory {
+        let (mesh, course) = self.course.as_ref().map_or((0, 0), CourseLook::gpu_bytes);
+        let (light_map, modern) = self.modern.as_ref().map_or((0, 0), ModernLook::gpu_bytes);
+        GpuMemory {
+            heights: self.grid.as_ref().map_or(0, GridTerrain::gpu_bytes),
+            mesh,
+            light_map,
+            textures: course + modern,
+            depth: self.depth.as_ref().map_or(0, |d| u64::from(d.size().0) * u64::from(d.size().1) * 4),
+        }
+    }
+
+    /// CPU memory the renderer keeps (the grid's level-of-detail tree), in bytes.
+    pub fn cpu_bytes(&self) -> usize {
+        self.grid.as_ref().map_or(0, GridTerrain::tree_bytes)
     }
 
     /// The scene configuration the world was laid out with.

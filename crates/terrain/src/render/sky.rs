@@ -6,7 +6,7 @@ use wgpu::util::DeviceExt;
 
 use super::RenderError;
 use super::pipeline::{
-    Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipelines, shader_source,
+    Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipeline, shader_source,
 };
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
@@ -21,21 +21,18 @@ struct SkyVertex {
     layer: u32,
 }
 
-/// The sky box's GPU resources.
+/// The sky box's faces on the GPU: a texture array, one layer a face.
 #[derive(Debug)]
-pub struct SkyPass {
-    pipelines: PipelinePair,
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    index_count: u32,
-    bind_group: wgpu::BindGroup,
+pub struct SkyFaces {
+    /// The faces' view (a 2-D array).
+    pub view: wgpu::TextureView,
+    /// GPU memory, in bytes (with mip levels).
+    pub bytes: u64,
 }
 
-impl SkyPass {
-    /// Uploads `sky` (faces of different sizes are resampled to the front wall's size) and builds
-    /// the box of `config`.
-    pub fn new(context: &PassContext<'_>, sky: &SkyBox, config: &SceneConfig) -> Result<Self, RenderError> {
-        let device = context.device;
+impl SkyFaces {
+    /// Uploads `sky` (faces of different sizes are resampled to the front wall's size).
+    pub fn new(context: &PassContext<'_>, sky: &SkyBox) -> Result<Self, RenderError> {
         let faces = sky.faces();
         let (width, height) = faces[0].dimensions();
         let resized: Vec<image::RgbaImage> = faces
@@ -49,32 +46,82 @@ impl SkyPass {
             })
             .collect();
         let layers: Vec<&image::RgbaImage> = resized.iter().collect();
-        let texture = upload(device, context.queue, "sky faces", &layers)?;
+        let texture = upload(context.device, context.queue, "sky faces", &layers)?;
         let view = texture.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         });
+        Ok(Self { view, bytes: u64::from(width) * u64::from(height) * 4 * 5 * 4 / 3 })
+    }
+}
+
+/// The sky box's GPU resources: its mesh, its faces' bind group and its pipelines (the world as
+/// it is and its mirror image).
+#[derive(Debug)]
+pub struct SkyPass {
+    pipelines: PipelinePair,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+    bind_group: wgpu::BindGroup,
+    /// Group 2 of the modern look (its lighting), if this is its sky.
+    lighting: Option<wgpu::BindGroup>,
+}
+
+impl SkyPass {
+    /// The course's sky box: `faces` as they are, on the box of `config`.
+    pub fn new(context: &PassContext<'_>, faces: &SkyFaces, config: &SceneConfig) -> Self {
+        let source = shader_source!("sky.wgsl");
+        Self::build(context, context, faces, config, source, ("vs_main", "fs_main"), None)
+    }
+
+    /// The modern look's sky box: `faces` graded for the sun by `lighting` (group 2, with its
+    /// `layout`). Its mirror image is drawn into the reflection, described by `reflection`.
+    pub fn modern(
+        context: &PassContext<'_>,
+        reflection: &PassContext<'_>,
+        faces: &SkyFaces,
+        config: &SceneConfig,
+        lighting: (&wgpu::BindGroupLayout, &wgpu::BindGroup),
+    ) -> Self {
+        let source = shader_source!("lighting.wgsl", "sky.wgsl", "sky_modern.wgsl");
+        Self::build(context, reflection, faces, config, source, ("vs_modern", "fs_modern"), Some(lighting))
+    }
+
+    fn build(
+        context: &PassContext<'_>,
+        mirrored_context: &PassContext<'_>,
+        faces: &SkyFaces,
+        config: &SceneConfig,
+        source: &str,
+        (vertex_entry, fragment_entry): (&str, &str),
+        lighting: Option<(&wgpu::BindGroupLayout, &wgpu::BindGroup)>,
+    ) -> Self {
+        let device = context.device;
         let (layout, bind_group) = bind_group(
             device,
             "sky",
-            &[Binding::TextureArray(&view), Binding::Sampler(&sampler(device, false))],
+            &[Binding::TextureArray(&faces.view), Binding::Sampler(&sampler(device, false))],
         );
         let (vertices, indices) = box_mesh(config);
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Uint32];
-        let pipelines = pipelines(
-            context,
-            &PipelineSpec {
-                label: "sky",
-                source: shader_source!("sky.wgsl"),
-                layout: &layout,
-                vertex_stride: size_of::<SkyVertex>() as u64,
-                attributes: &attributes,
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                strip_index_format: None,
-                blend: false,
-            },
-        );
-        Ok(Self {
+        let buffers = [wgpu::VertexBufferLayout {
+            array_stride: size_of::<SkyVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attributes,
+        }];
+        let layouts: Vec<&wgpu::BindGroupLayout> =
+            std::iter::once(&layout).chain(lighting.map(|l| l.0)).collect();
+        let spec = PipelineSpec {
+            vertex_entry,
+            fragment_entry: Some(fragment_entry),
+            ..PipelineSpec::new("sky", source, &layouts, &buffers)
+        };
+        let pipelines = PipelinePair {
+            direct: pipeline(context, &spec, false),
+            mirrored: pipeline(mirrored_context, &spec, true),
+        };
+        Self {
             pipelines,
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("sky vertices"),
@@ -88,7 +135,8 @@ impl SkyPass {
             }),
             index_count: indices.len() as u32,
             bind_group,
-        })
+            lighting: lighting.map(|l| l.1.clone()),
+        }
     }
 
     /// Draws the sky box, or its mirror image, in one draw call.
@@ -96,6 +144,9 @@ impl SkyPass {
         pass.set_pipeline(self.pipelines.get(mirrored));
         pass.set_bind_group(0, frame, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
+        if let Some(lighting) = &self.lighting {
+            pass.set_bind_group(2, lighting, &[]);
+        }
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
         pass.draw_indexed(0..self.index_count, 0, 0..1);

@@ -1,7 +1,7 @@
 //! The uniforms every pass shares (group 0): the camera, the mirror and the water's drift.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec2};
+use glam::{Mat4, Vec2, Vec3};
 
 /// Per-pass values, laid out as the WGSL struct `Frame` in every shader.
 #[repr(C)]
@@ -15,16 +15,19 @@ pub struct FrameUniforms {
     pub padding: f32,
     /// The water texture's offset, in texture repeats.
     pub water_offset: [f32; 2],
+    /// The camera's position (world units), then 0.
+    pub eye: [f32; 4],
 }
 
 impl FrameUniforms {
-    /// The uniforms of the direct (`mirrored = false`) or mirrored pass.
-    pub fn new(view_projection: Mat4, mirrored: bool, water_offset: Vec2) -> Self {
+    /// The uniforms of the direct (`mirrored = false`) or mirrored pass seen from `eye`.
+    pub fn new(view_projection: Mat4, mirrored: bool, water_offset: Vec2, eye: Vec3) -> Self {
         Self {
             view_projection: view_projection.to_cols_array_2d(),
             y_sign: if mirrored { -1.0 } else { 1.0 },
             padding: 0.0,
             water_offset: water_offset.to_array(),
+            eye: eye.extend(0.0).to_array(),
         }
     }
 }
@@ -52,9 +55,9 @@ mod tests {
 
     #[test]
     fn layout_matches_the_wgsl_struct() {
-        // mat4x4<f32> (64) + f32 + f32 + vec2<f32> = 80 bytes, a multiple of 16.
-        assert_eq!(size_of::<FrameUniforms>(), 80);
-        let mirrored = FrameUniforms::new(Mat4::IDENTITY, true, Vec2::new(0.25, 0.5));
+        // mat4x4<f32> (64) + f32 + f32 + vec2<f32> + vec4<f32> = 96 bytes, a multiple of 16.
+        assert_eq!(size_of::<FrameUniforms>(), 96);
+        let mirrored = FrameUniforms::new(Mat4::IDENTITY, true, Vec2::new(0.25, 0.5), Vec3::ONE);
         assert_eq!(mirrored.y_sign, -1.0);
         assert_eq!(mirrored.water_offset, [0.25, 0.5]);
     }

@@ -11,10 +11,10 @@ use super::pipeline::{
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
 
-/// A corner of the water plane.
+/// A corner of the water plane: its position and its texture coordinates.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
-struct WaterVertex {
+pub struct WaterVertex {
     position: [f32; 3],
     uv: [f32; 2],
 }
@@ -61,17 +61,17 @@ impl WaterPass {
             ],
         );
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2];
+        let buffers = [wgpu::VertexBufferLayout {
+            array_stride: size_of::<WaterVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attributes,
+        }];
         let pipelines = pipelines(
             context,
             &PipelineSpec {
-                label: "water",
-                source: shader_source!("water.wgsl"),
-                layout: &layout,
-                vertex_stride: size_of::<WaterVertex>() as u64,
-                attributes: &attributes,
                 topology: wgpu::PrimitiveTopology::TriangleStrip,
-                strip_index_format: None,
                 blend: true,
+                ..PipelineSpec::new("water", shader_source!("water.wgsl"), &[&layout], &buffers)
             },
         );
         Ok(Self {
@@ -97,7 +97,7 @@ impl WaterPass {
 
 /// The plane over the sky box's floor as a 4-vertex strip, counter-clockwise seen from above,
 /// with the texture repeated `water_repeat` times (u along +x, v along +z).
-fn plane(config: &SceneConfig) -> [WaterVertex; 4] {
+pub fn plane(config: &SceneConfig) -> [WaterVertex; 4] {
     let (hx, hz) = (config.sky_box_size.x / 2.0, config.sky_box_size.z / 2.0);
     let (ru, rv) = (config.water_repeat.x, config.water_repeat.y);
     [

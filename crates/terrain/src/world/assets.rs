@@ -50,6 +50,7 @@ pub fn load_course_folder(dir: &Path) -> Result<World, WorldError> {
             top: read_rgba(path(7))?,
         },
         water: read_rgba(path(8))?,
+        unlit: None,
     })
 }
 

@@ -58,7 +58,7 @@ mod tests {
         assert_eq!(back.colour_map, world.colour_map);
         assert_eq!(back.sky, world.sky);
         assert_eq!(back.water, world.water);
-        for (a, b) in back.heightmap.levels().iter().zip(world.heightmap.levels()) {
+        for (a, b) in back.heightmap.levels().zip(world.heightmap.levels()) {
             assert!((a - b).abs() <= 0.5 + 1e-3, "{a} vs {b}");
         }
         let _ = std::fs::remove_dir_all(&dir);

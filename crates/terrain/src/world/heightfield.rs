@@ -27,9 +27,14 @@ impl Heightfield {
         Self {
             columns,
             rows,
-            cell_size: config.terrain_length / columns.max(rows) as f32,
-            heights: heightmap.levels().iter().map(|&level| config.height_of_level(level)).collect(),
+            cell_size: Self::cell_size_of(heightmap, config),
+            heights: heightmap.levels().map(|level| config.height_of_level(level)).collect(),
         }
+    }
+
+    /// Distance between neighbouring samples of `heightmap` placed with `config`, in world units.
+    pub fn cell_size_of(heightmap: &Heightmap, config: &SceneConfig) -> f32 {
+        config.terrain_length / heightmap.columns().max(heightmap.rows()) as f32
     }
 
     /// Samples per row.
@@ -76,19 +81,7 @@ impl Heightfield {
     /// Terrain height under (`x`, `z`), interpolated bilinearly between the four surrounding
     /// samples; `None` outside the grid of samples.
     pub fn height_at(&self, x: f32, z: f32) -> Option<f32> {
-        let half = self.extent() * 0.5;
-        let column = (x + half.x) / self.cell_size - 0.5;
-        let row = (z + half.y) / self.cell_size - 0.5;
-        let (last_column, last_row) = ((self.columns - 1) as f32, (self.rows - 1) as f32);
-        if !(0.0..=last_column).contains(&column) || !(0.0..=last_row).contains(&row) {
-            return None;
-        }
-        let (c0, r0) =
-            ((column.floor() as u32).min(self.columns - 2), (row.floor() as u32).min(self.rows - 2));
-        let (fx, fz) = (column - c0 as f32, row - r0 as f32);
-        let top = lerp(self.height(r0, c0), self.height(r0, c0 + 1), fx);
-        let bottom = lerp(self.height(r0 + 1, c0), self.height(r0 + 1, c0 + 1), fx);
-        Some(lerp(top, bottom, fz))
+        bilinear(self.columns, self.rows, self.cell_size, x, z, |row, column| self.height(row, column))
     }
 
     /// Texture coordinates of (`x`, `z`) on a map stretched over the footprint: (0, 0) at the
@@ -96,6 +89,39 @@ impl Heightfield {
     pub fn uv(&self, x: f32, z: f32) -> Vec2 {
         Vec2::new(x, z) / self.extent() + 0.5
     }
+}
+
+/// Terrain height under (`x`, `z`) of `heightmap` placed with `config`, as
+/// [`Heightfield::height_at`] gives it, without a copy of the heights (for a single query).
+pub fn height_under(heightmap: &Heightmap, config: &SceneConfig, x: f32, z: f32) -> Option<f32> {
+    let cell = Heightfield::cell_size_of(heightmap, config);
+    bilinear(heightmap.columns(), heightmap.rows(), cell, x, z, |row, column| {
+        config.height_of_level(heightmap.level(row, column))
+    })
+}
+
+/// Bilinear interpolation at (`x`, `z`) of a `columns` x `rows` grid of samples `cell` apart,
+/// centred on the origin, `height(row, column)` giving the samples; `None` outside the grid.
+fn bilinear(
+    columns: u32,
+    rows: u32,
+    cell: f32,
+    x: f32,
+    z: f32,
+    height: impl Fn(u32, u32) -> f32,
+) -> Option<f32> {
+    let half = Vec2::new(columns as f32, rows as f32) * cell * 0.5;
+    let column = (x + half.x) / cell - 0.5;
+    let row = (z + half.y) / cell - 0.5;
+    let (last_column, last_row) = ((columns - 1) as f32, (rows - 1) as f32);
+    if !(0.0..=last_column).contains(&column) || !(0.0..=last_row).contains(&row) {
+        return None;
+    }
+    let (c0, r0) = ((column.floor() as u32).min(columns - 2), (row.floor() as u32).min(rows - 2));
+    let (fx, fz) = (column - c0 as f32, row - r0 as f32);
+    let top = lerp(height(r0, c0), height(r0, c0 + 1), fx);
+    let bottom = lerp(height(r0 + 1, c0), height(r0 + 1, c0 + 1), fx);
+    Some(lerp(top, bottom, fz))
 }
 
 fn lerp(a: f32, b: f32, t: f32) -> f32 {
@@ -147,5 +173,16 @@ mod tests {
         assert!((mid - 0.75).abs() < 1e-5);
         assert_eq!(f.height_at(right.x + 0.01, 0.0), None);
         assert_eq!(f.height_at(0.0, 100.0), None);
+    }
+
+    #[test]
+    fn a_single_query_agrees_with_the_field() {
+        let config = SceneConfig::default();
+        let levels: Vec<f32> = (0..35).map(|i| (i * 37 % 255) as f32).collect();
+        let map = Heightmap::new(7, 5, levels).expect("valid");
+        let f = Heightfield::new(&map, &config);
+        for (x, z) in [(0.0, 0.0), (-7.3, 2.9), (8.4, -3.3), (9.9, 0.0), (0.0, 9.0), (-30.0, 1.0)] {
+            assert_eq!(height_under(&map, &config, x, z), f.height_at(x, z), "at {x}, {z}");
+        }
     }
 }

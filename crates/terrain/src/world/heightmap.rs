@@ -54,11 +54,34 @@ pub enum HeightmapError {
 /// A grid of heights as grey levels on the 8-bit scale: 0.0 is black, 255.0 white. 16-bit images
 /// keep their precision as fractional levels. Row 0 is the image's top row, which the terrain puts
 /// at its far (-z) edge; column 0 is the image's left column, at the terrain's -x edge.
+///
+/// Images are kept as their 16-bit values (`level = value / 257`, exact for 8- and 16-bit
+/// images): 2 bytes a sample. Grids built from numbers ([`Heightmap::new`]) keep them as `f32`:
+/// 4 bytes a sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Heightmap {
     columns: u32,
     rows: u32,
-    levels: Vec<f32>,
+    samples: Samples,
+}
+
+/// How a heightmap stores its samples.
+#[derive(Debug, Clone, PartialEq)]
+enum Samples {
+    /// Grey levels as numbers.
+    Levels(Vec<f32>),
+    /// 16-bit values: `level = value / 257`.
+    Sixteen(Vec<u16>),
+}
+
+/// The grey level of a 16-bit value: `value / 257` (so 8-bit grey `g`, stored as `257 g`, is `g`).
+pub fn level_of_sixteen(value: u16) -> f32 {
+    f32::from(value) / 257.0
+}
+
+/// The 16-bit value nearest to a grey level (`level * 257`, rounded and clamped to 0..=65535).
+pub fn sixteen_of_level(level: f32) -> u16 {
+    (level * 257.0).round().clamp(0.0, 65535.0) as u16
 }
 
 impl Heightmap {
@@ -72,18 +95,37 @@ impl Heightmap {
             let index = index as u32;
             return Err(HeightmapError::NotFinite { row: index / columns, column: index % columns });
         }
-        Ok(Self { columns, rows, levels })
+        Ok(Self { columns, rows, samples: Samples::Levels(levels) })
+    }
+
+    /// A heightmap of `columns` x `rows` 16-bit values (`level = value / 257`), given row by row
+    /// from the top row: 2 bytes a sample.
+    pub fn from_sixteen_bit(columns: u32, rows: u32, values: Vec<u16>) -> Result<Self, HeightmapError> {
+        Self::check_size(columns, rows)?;
+        if values.len() != columns as usize * rows as usize {
+            return Err(HeightmapError::SampleCount { columns, rows, len: values.len() });
+        }
+        Ok(Self { columns, rows, samples: Samples::Sixteen(values) })
     }
 
     /// The heightmap of a decoded image. Colour images are reduced to their luminance; 8-bit
     /// images give whole levels, 16-bit ones fractional levels (`value / 257`).
     pub fn from_image(image: &DynamicImage) -> Result<Self, HeightmapError> {
-        let (columns, rows) = (image.width(), image.height());
         // Check the size before converting, so a huge image fails before a huge allocation.
-        Self::check_size(columns, rows)?;
-        let grey = image.to_luma16();
-        let levels = grey.pixels().map(|p| f32::from(p.0[0]) / 257.0).collect();
-        Self::new(columns, rows, levels)
+        Self::check_size(image.width(), image.height())?;
+        Self::from_luma16(image.to_luma16())
+    }
+
+    /// Like [`Self::from_image`], taking the image: a 16-bit greyscale image becomes the
+    /// heightmap without a copy.
+    pub fn from_image_owned(image: DynamicImage) -> Result<Self, HeightmapError> {
+        Self::check_size(image.width(), image.height())?;
+        Self::from_luma16(image.into_luma16())
+    }
+
+    fn from_luma16(grey: image::ImageBuffer<image::Luma<u16>, Vec<u16>>) -> Result<Self, HeightmapError> {
+        let (columns, rows) = grey.dimensions();
+        Self::from_sixteen_bit(columns, rows, grey.into_raw())
     }
 
     /// Reads a heightmap from an image file (PNG, BMP, JPEG, ...; the format is recognised from
@@ -106,7 +148,7 @@ impl Heightmap {
         let (columns, rows) = image::ImageDecoder::dimensions(&decoder);
         Self::check_size(columns, rows).map_err(bad)?;
         let image = decode_checked(decoder, path)?;
-        Self::from_image(&image).map_err(bad)
+        Self::from_image_owned(image).map_err(bad)
     }
 
     /// Whether a heightmap may have `columns` x `rows` samples (2 to [`MAX_HEIGHTMAP_SIDE`] per side).
@@ -133,22 +175,80 @@ impl Heightmap {
     /// Grey level at `row`, `column` (0.0..=255.0 for images). Panics when out of range.
     pub fn level(&self, row: u32, column: u32) -> f32 {
         assert!(row < self.rows && column < self.columns, "sample out of range");
-        self.levels[(row * self.columns + column) as usize]
+        let index = row as usize * self.columns as usize + column as usize;
+        match &self.samples {
+            Samples::Levels(levels) => levels[index],
+            Samples::Sixteen(values) => level_of_sixteen(values[index]),
+        }
     }
 
     /// All grey levels, row by row from the top row.
-    pub fn levels(&self) -> &[f32] {
-        &self.levels
+    pub fn levels(&self) -> LevelIter<'_> {
+        match &self.samples {
+            Samples::Levels(levels) => LevelIter::Levels(levels.iter()),
+            Samples::Sixteen(values) => LevelIter::Sixteen(values.iter()),
+        }
+    }
+
+    /// The samples of row `row` as 16-bit values (`level * 257`, rounded and clamped), appended
+    /// to `out`: what the GPU's height texture holds.
+    pub fn extend_sixteen_bit_row(&self, row: u32, out: &mut Vec<u16>) {
+        let start = row as usize * self.columns as usize;
+        let end = start + self.columns as usize;
+        match &self.samples {
+            Samples::Levels(levels) => out.extend(levels[start..end].iter().map(|&l| sixteen_of_level(l))),
+            Samples::Sixteen(values) => out.extend_from_slice(&values[start..end]),
+        }
+    }
+
+    /// Bytes of memory one sample takes: 2 for images and large procedural maps, 4 for grids
+    /// built from numbers.
+    pub fn bytes_per_sample(&self) -> usize {
+        match &self.samples {
+            Samples::Levels(_) => size_of::<f32>(),
+            Samples::Sixteen(_) => size_of::<u16>(),
+        }
     }
 
     /// The heightmap as a 16-bit greyscale image (`level * 257`, clamped to 0..=65535).
     pub fn to_image(&self) -> image::ImageBuffer<image::Luma<u16>, Vec<u16>> {
-        let data =
-            self.levels.iter().map(|level| (level * 257.0).round().clamp(0.0, 65535.0) as u16).collect();
+        let mut data = Vec::with_capacity(self.columns as usize * self.rows as usize);
+        for row in 0..self.rows {
+            self.extend_sixteen_bit_row(row, &mut data);
+        }
         image::ImageBuffer::from_raw(self.columns, self.rows, data)
             .expect("a heightmap holds exactly columns * rows levels")
     }
 }
+
+/// The grey levels of a [`Heightmap`], row by row.
+#[derive(Debug, Clone)]
+pub enum LevelIter<'a> {
+    /// Over levels stored as numbers.
+    Levels(std::slice::Iter<'a, f32>),
+    /// Over 16-bit values.
+    Sixteen(std::slice::Iter<'a, u16>),
+}
+
+impl Iterator for LevelIter<'_> {
+    type Item = f32;
+
+    fn next(&mut self) -> Option<f32> {
+        match self {
+            LevelIter::Levels(levels) => levels.next().copied(),
+            LevelIter::Sixteen(values) => values.next().map(|&value| level_of_sixteen(value)),
+        }
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        match self {
+            LevelIter::Levels(levels) => levels.size_hint(),
+            LevelIter::Sixteen(values) => values.size_hint(),
+        }
+    }
+}
+
+impl ExactSizeIterator for LevelIter<'_> {}
 
 #[cfg(test)]
 mod tests {
@@ -201,10 +301,25 @@ mod tests {
     }
 
     #[test]
+    fn images_take_two_bytes_a_sample_and_keep_their_values() {
+        let image: ImageBuffer<Luma<u16>, Vec<u16>> =
+            ImageBuffer::from_fn(3, 2, |x, y| Luma([(x * 20_000 + y) as u16]));
+        let map = Heightmap::from_image_owned(DynamicImage::ImageLuma16(image.clone())).expect("valid");
+        assert_eq!(map.bytes_per_sample(), 2);
+        assert_eq!(map.to_image(), image);
+        assert_eq!(map.levels().len(), 6);
+        let numbers = Heightmap::new(2, 2, vec![1.0, 2.0, 3.0, 255.0]).expect("valid");
+        assert_eq!(numbers.bytes_per_sample(), 4);
+        let mut row = Vec::new();
+        numbers.extend_sixteen_bit_row(1, &mut row);
+        assert_eq!(row, vec![771, 65535]);
+    }
+
+    #[test]
     fn round_trips_through_a_sixteen_bit_image() {
         let map = Heightmap::new(3, 2, vec![0.0, 12.5, 255.0, 100.0, 99.75, 3.0]).expect("valid");
         let back = Heightmap::from_image(&DynamicImage::ImageLuma16(map.to_image())).expect("valid");
-        for (a, b) in map.levels().iter().zip(back.levels()) {
+        for (a, b) in map.levels().zip(back.levels()) {
             assert!((a - b).abs() < 1.0 / 257.0, "{a} vs {b}");
         }
     }

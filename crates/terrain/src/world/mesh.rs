@@ -23,23 +23,40 @@ use crate::camera::Frustum;
 /// Cells along a side of a chunk (the last chunk of a row or column may be smaller).
 pub const CHUNK_CELLS: u32 = 32;
 
-/// One level of detail of one chunk: its own block of vertices, and indices into that block
-/// (the surface's triangles, then its skirts').
+/// The four edges of a chunk, in the order of [`ChunkLevel::skirts`] and [`Chunk::edge_planes`]:
+/// its first (far, -z) row, its last (near, +z) row, its first (left, -x) column and its last
+/// (right, +x) column.
+pub const EDGE_COUNT: usize = 4;
+
+/// One level of detail of one chunk: its surface and its skirts, each a range of indices into
+/// its own compact block of vertices.
+///
+/// Each skirt is stored as two one-sided strips, one facing each side of the edge's vertical
+/// plane. Only the strip facing the camera can produce pixels (the other is culled as a back
+/// face), so a frame draws one strip per edge ([`TerrainMesh::select`]): the picture is the same
+/// as with two-sided skirts, for half of their triangles.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChunkLevel {
-    /// First vertex of the block in [`TerrainMesh::positions`]; the indices count from it.
-    pub base_vertex: u32,
-    /// Vertices in the block.
-    pub vertex_count: u32,
-    /// First index in [`TerrainMesh::indices`].
-    pub first_index: u32,
-    /// Indices of the surface's triangles, from `first_index`.
-    pub surface_indices: u32,
-    /// Indices of the surface and the skirts that follow it.
-    pub index_count: u32,
+    /// The surface's triangles.
+    pub surface: DrawRange,
+    /// The skirts along the four edges ([`EDGE_COUNT`] order), each as `[strip facing toward
+    /// -axis, strip facing toward +axis]` (the axis is z for rows, x for columns).
+    pub skirts: [[DrawRange; 2]; EDGE_COUNT],
     /// Largest vertical distance, in world units, between this level's visible surface and the
     /// full-resolution one (never less than the finer levels').
     pub error: f32,
+}
+
+impl ChunkLevel {
+    /// Every range of this level: the surface, then the skirts' strips edge by edge.
+    pub fn ranges(&self) -> impl Iterator<Item = &DrawRange> {
+        std::iter::once(&self.surface).chain(self.skirts.iter().flatten())
+    }
+
+    /// Whether the level has no triangle above the water.
+    pub fn is_empty(&self) -> bool {
+        self.ranges().all(|range| range.index_count == 0)
+    }
 }
 
 /// A square of the terrain at all its levels of detail.
@@ -49,12 +66,15 @@ pub struct Chunk {
     pub min: Vec3,
     /// Highest corner of that box.
     pub max: Vec3,
+    /// The coordinates of the vertical planes of the four edges ([`EDGE_COUNT`] order): z of the
+    /// first and last rows, x of the first and last columns.
+    pub edge_planes: [f32; EDGE_COUNT],
     /// Level 0 (every sample) first, then successively halved resolutions.
     pub levels: Vec<ChunkLevel>,
 }
 
-/// What to draw for one chunk at one level: a range of indices into a block of vertices.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// What to draw for one part of a chunk at one level: a range of indices into a block of vertices.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct DrawRange {
     /// First index in [`TerrainMesh::indices`].
     pub first_index: u32,
@@ -82,10 +102,11 @@ pub struct LodView {
 
 /// The terrain above the water as indexed triangle lists, in chunks and levels of detail.
 ///
-/// Every chunk level has its own compact block of vertices (its samples, the points where its
-/// edges cross the water, the bottoms of its skirts) and 16-bit indices relative to the block:
-/// a GPU then only processes the vertices a draw uses. Surface triangles are wound
-/// counter-clockwise seen from above (their normals point up, +y); skirts are two-sided.
+/// Every part of a chunk level (its surface, each strip of its skirts) has its own compact block
+/// of vertices (its samples, the points where its edges cross the water, the bottoms of its
+/// skirts) and 16-bit indices relative to the block: a GPU then only processes the vertices a
+/// draw uses. Surface triangles are wound counter-clockwise seen from above (their normals point
+/// up, +y); each skirt has a strip facing either way.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TerrainMesh {
     /// World positions (x, y, z) of all blocks, one after the other.
@@ -171,31 +192,33 @@ impl TerrainMesh {
                     block.add([c, b, d]);
                 }
             }
-            let surface_indices = block.indices.len() as u32;
-            let edges: [Vec<u32>; 4] = [
-                (0..width).map(|j| at(0, j)).collect(),
-                (0..width).map(|j| at(last_row, j)).collect(),
-                (0..=last_row).map(|i| at(i, 0)).collect(),
-                (0..=last_row).map(|i| at(i, last_column)).collect(),
+            // The edges' samples, in increasing order along each edge ([`EDGE_COUNT`] order).
+            let edges: [Vec<[f32; 3]>; EDGE_COUNT] = [
+                (0..width).map(|j| block.positions[at(0, j) as usize]).collect(),
+                (0..width).map(|j| block.positions[at(last_row, j) as usize]).collect(),
+                (0..=last_row).map(|i| block.positions[at(i, 0) as usize]).collect(),
+                (0..=last_row).map(|i| block.positions[at(i, last_column) as usize]).collect(),
             ];
-            for edge in edges {
-                for pair in edge.windows(2) {
-                    block.skirt(pair[0], pair[1], skirt_depth);
-                }
-            }
-            levels.push(ChunkLevel {
-                base_vertex: self.positions.len() as u32,
-                vertex_count: block.positions.len() as u32,
-                first_index: self.indices.len() as u32,
-                surface_indices,
-                index_count: block.indices.len() as u32,
-                error,
+            let surface = self.push_block(block);
+            let mut edge_index = 0;
+            let skirts = edges.map(|edge| {
+                // Rows are planes of constant z, columns of constant x.
+                let axis = if edge_index < 2 { 2 } else { 0 };
+                edge_index += 1;
+                let strips = [0, 1].map(|side| skirt_strip(&edge, side, skirt_depth));
+                // Order the strips by the side they face: toward -axis first.
+                let facing_negative = |strip: &Block| {
+                    strip.indices.chunks_exact(3).next().is_some_and(|t| {
+                        let p = |i: u32| Vec3::from_array(strip.positions[i as usize]);
+                        let normal = (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0]));
+                        normal[axis] < 0.0
+                    })
+                };
+                let [first, second] = strips;
+                let ordered = if facing_negative(&second) { [second, first] } else { [first, second] };
+                ordered.map(|strip| self.push_block(strip))
             });
-            // A level has at most 33 x 33 samples plus a few crossings and skirt vertices, far
-            // below the 65536 that 16-bit indices can reach.
-            debug_assert!(block.positions.len() <= usize::from(u16::MAX) + 1);
-            self.positions.extend(block.positions);
-            self.indices.extend(block.indices.iter().map(|&i| i as u16));
+            levels.push(ChunkLevel { surface, skirts, error });
         }
         let heights =
             (rows.0..=rows.1).flat_map(|r| (columns.0..=columns.1).map(move |c| field.height(r, c)));
@@ -204,8 +227,24 @@ impl TerrainMesh {
         Chunk {
             min: Vec3::new(first.x, (low - skirt_depth).max(0.0), first.z),
             max: Vec3::new(last.x, high.max(0.0), last.z),
+            edge_planes: [first.z, last.z, first.x, last.x],
             levels,
         }
+    }
+
+    /// Appends a block's vertices and indices and returns its range.
+    fn push_block(&mut self, block: Block) -> DrawRange {
+        // A block has at most 33 x 33 samples plus a few crossings, far below the 65536 that
+        // 16-bit indices can reach.
+        debug_assert!(block.positions.len() <= usize::from(u16::MAX) + 1);
+        let range = DrawRange {
+            first_index: self.indices.len() as u32,
+            index_count: block.indices.len() as u32,
+            base_vertex: self.positions.len() as u32,
+        };
+        self.positions.extend(block.positions);
+        self.indices.extend(block.indices.iter().map(|&i| i as u16));
+        range
     }
 
     /// The surface triangles of `level` over all chunks (chunks with fewer levels at their
@@ -214,16 +253,15 @@ impl TerrainMesh {
         self.chunks
             .iter()
             .filter_map(|chunk| chunk.levels.get(level).or(chunk.levels.last()))
-            .flat_map(|l| self.triangles(l, 0..l.surface_indices))
+            .flat_map(|l| self.triangles(&l.surface))
             .collect()
     }
 
-    /// The triangles of `level` whose indices are `range` (relative to its first index), as
-    /// world positions.
-    pub fn triangles(&self, level: &ChunkLevel, range: std::ops::Range<u32>) -> Vec<[Vec3; 3]> {
-        let start = (level.first_index + range.start) as usize;
-        let end = (level.first_index + range.end) as usize;
-        let vertex = |i: u16| Vec3::from_array(self.positions[level.base_vertex as usize + usize::from(i)]);
+    /// The triangles of `range`, as world positions.
+    pub fn triangles(&self, range: &DrawRange) -> Vec<[Vec3; 3]> {
+        let start = range.first_index as usize;
+        let end = start + range.index_count as usize;
+        let vertex = |i: u16| Vec3::from_array(self.positions[range.base_vertex as usize + usize::from(i)]);
         self.indices[start..end].chunks_exact(3).map(|t| [vertex(t[0]), vertex(t[1]), vertex(t[2])]).collect()
     }
 
@@ -233,18 +271,19 @@ impl TerrainMesh {
         self.chunks
             .iter()
             .filter_map(|chunk| chunk.levels.get(level).or(chunk.levels.last()))
-            .map(|l| l.surface_indices as usize / 3)
+            .map(|l| l.surface.index_count as usize / 3)
             .sum()
     }
 
-    /// The chunks to draw for `view`, nearest first (so the depth test hides what is behind
-    /// before it is shaded), each at the coarsest level whose error stays within
-    /// `view.max_error_pixels` on screen; chunks out of view or under water are left out.
+    /// What to draw for `view`: the chunks in view, nearest first (so the depth test hides what
+    /// is behind before it is shaded), each at the coarsest level whose error stays within
+    /// `view.max_error_pixels` on screen, as its surface and the skirt strips that face the camera
+    /// (up to five ranges a chunk). Chunks out of view or under water are left out.
     pub fn select(&self, view: &LodView) -> Vec<DrawRange> {
-        let mut chosen: Vec<(f32, DrawRange)> = self
+        let mut chosen: Vec<(f32, &Chunk, &ChunkLevel)> = self
             .chunks
             .iter()
-            .filter(|chunk| chunk.levels.first().is_some_and(|l| l.index_count > 0))
+            .filter(|chunk| chunk.levels.first().is_some_and(|l| !l.is_empty()))
             .filter_map(|chunk| {
                 let (min, max) = if view.mirrored {
                     (
@@ -261,20 +300,65 @@ impl TerrainMesh {
                 let allowed = view.max_error_pixels * distance / view.pixels_per_unit;
                 let level =
                     chunk.levels.iter().rev().find(|l| l.error <= allowed).unwrap_or(&chunk.levels[0]);
-                let range = DrawRange {
-                    first_index: level.first_index,
-                    index_count: level.index_count,
-                    base_vertex: level.base_vertex,
-                };
                 // Order by the distance to the box's centre: the eye may be inside several boxes,
                 // which are all at distance 0 from their surfaces.
                 let order = ((min + max) * 0.5 - view.eye).length_squared();
-                Some((order, range))
+                Some((order, chunk, level))
             })
             .collect();
         chosen.sort_by(|a, b| a.0.total_cmp(&b.0));
-        chosen.into_iter().map(|(_, range)| range).collect()
+        let mut ranges = Vec::with_capacity(chosen.len() * (1 + EDGE_COUNT));
+        for (_, chunk, level) in chosen {
+            ranges.push(level.surface);
+            for (edge, strips) in level.skirts.iter().enumerate() {
+                // Rows are planes of constant z, columns of constant x. The mirror image keeps x
+                // and z, so the same strip faces the camera in both passes.
+                let eye = if edge < 2 { view.eye.z } else { view.eye.x };
+                let offset = eye - chunk.edge_planes[edge];
+                // Within a millimetre of the plane both strips are drawn, so that rounding can
+                // never drop a strip the GPU would rasterise.
+                if offset < SKIRT_SIDE_MARGIN {
+                    ranges.push(strips[0]);
+                }
+                if offset > -SKIRT_SIDE_MARGIN {
+                    ranges.push(strips[1]);
+                }
+            }
+        }
+        ranges.retain(|range| range.index_count > 0);
+        ranges
     }
+}
+
+/// How close to a skirt's plane, in world units, the camera draws both of its strips.
+const SKIRT_SIDE_MARGIN: f32 = 1e-3;
+
+/// One strip of the skirt hanging `depth` below `edge` (its samples in increasing order), cut at
+/// the water: `side` 0 or 1 picks the strip's winding, one facing each side of the edge's plane.
+/// The triangles are those of the course engine's two-sided skirt, in its order, each with its
+/// own copy of the edge's vertices.
+fn skirt_strip(edge: &[[f32; 3]], side: usize, depth: f32) -> Block {
+    let mut block = Block::default();
+    block.positions.extend_from_slice(edge);
+    for pair in 0..edge.len().saturating_sub(1) {
+        let (p, q) = (pair as u32, pair as u32 + 1);
+        // Nothing to hide where the edge is under water.
+        if block.height(p) < 0.0 && block.height(q) < 0.0 {
+            continue;
+        }
+        let mut below = |v: u32| {
+            let [x, y, z] = block.positions[v as usize];
+            block.positions.push([x, y - depth, z]);
+            block.positions.len() as u32 - 1
+        };
+        let (p_low, q_low) = (below(p), below(q));
+        let triangles =
+            if side == 0 { [[p, q, q_low], [p, q_low, p_low]] } else { [[q, p, p_low], [q, p_low, q_low]] };
+        for triangle in triangles {
+            block.add(triangle);
+        }
+    }
+    block
 }
 
 /// The samples of the span `first..=last` at `stride`, always including `last`.
@@ -335,24 +419,6 @@ struct Block {
 impl Block {
     fn height(&self, vertex: u32) -> f32 {
         self.positions[vertex as usize][1]
-    }
-
-    /// A two-sided vertical strip hanging `depth` below the edge from `p` to `q`, cut at the
-    /// water.
-    fn skirt(&mut self, p: u32, q: u32, depth: f32) {
-        // Nothing to hide where the edge is under water.
-        if self.height(p) < 0.0 && self.height(q) < 0.0 {
-            return;
-        }
-        let mut below = |v: u32| {
-            let [x, y, z] = self.positions[v as usize];
-            self.positions.push([x, y - depth, z]);
-            self.positions.len() as u32 - 1
-        };
-        let (p_low, q_low) = (below(p), below(q));
-        for triangle in [[p, q, q_low], [p, q_low, p_low], [q, p, p_low], [q, p_low, q_low]] {
-            self.add(triangle);
-        }
     }
 
     /// Adds the part of `triangle` at or above the water.
@@ -463,18 +529,20 @@ mod tests {
         assert_eq!(mesh.chunks.len(), 6);
         assert_eq!(mesh.chunks[0].levels.len(), 6, "strides 1 to 32");
         assert_eq!(mesh.chunks[5].levels.len(), 4, "a 5 x 7-cell chunk: strides 1 to 8");
-        for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
+        // Blocks follow one another without gaps or overlaps, and index only their own vertices.
+        let ranges: Vec<&DrawRange> =
+            mesh.chunks.iter().flat_map(|c| &c.levels).flat_map(ChunkLevel::ranges).collect();
+        let (mut next_vertex, mut next_index) = (0, 0);
+        for (i, range) in ranges.iter().enumerate() {
+            assert_eq!((range.base_vertex, range.first_index), (next_vertex, next_index));
+            let end = ranges.get(i + 1).map_or(mesh.positions.len() as u32, |r| r.base_vertex);
             let indices =
-                &mesh.indices[level.first_index as usize..(level.first_index + level.index_count) as usize];
-            assert!(indices.iter().all(|&i| u32::from(i) < level.vertex_count));
+                &mesh.indices[range.first_index as usize..(range.first_index + range.index_count) as usize];
+            assert!(indices.iter().all(|&v| range.base_vertex + u32::from(v) < end));
+            next_vertex = end;
+            next_index += range.index_count;
         }
-        // Blocks follow one another without gaps or overlaps.
-        let mut next = 0;
-        for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
-            assert_eq!(level.base_vertex, next);
-            next += level.vertex_count;
-        }
-        assert_eq!(next as usize, mesh.positions.len());
+        assert_eq!(next_index as usize, mesh.indices.len());
     }
 
     #[test]
@@ -533,14 +601,24 @@ mod tests {
     fn skirts_hang_below_the_chunk_edges() {
         let f = field(40, 40, vec![150.0; 1600]);
         let mesh = TerrainMesh::new(&f);
-        let level = mesh.chunks[0].levels[0];
-        assert!(level.index_count > level.surface_indices);
-        let skirts = mesh.triangles(&level, level.surface_indices..level.index_count);
+        let chunk = &mesh.chunks[0];
+        let level = chunk.levels[0];
         let top = f.height(0, 0);
-        assert!(skirts.iter().flatten().all(|v| v.y <= top + 1e-6 && v.y >= 0.0));
-        assert!(skirts.iter().flatten().any(|v| v.y < top));
-        // Vertical: no area seen from above.
-        assert!(plan_area(&skirts) < 1e-6);
+        for (edge, strips) in level.skirts.iter().enumerate() {
+            let [toward_negative, toward_positive] = strips.map(|strip| mesh.triangles(&strip));
+            assert!(!toward_negative.is_empty() && toward_negative.len() == toward_positive.len());
+            for (triangles, sign) in [(&toward_negative, -1.0), (&toward_positive, 1.0)] {
+                assert!(triangles.iter().flatten().all(|v| v.y <= top + 1e-6 && v.y >= 0.0));
+                assert!(triangles.iter().flatten().any(|v| v.y < top));
+                // Vertical, in the edge's plane, facing the side the strip is filed under.
+                assert!(plan_area(triangles) < 1e-6);
+                let axis = if edge < 2 { 2 } else { 0 };
+                for [a, b, c] in triangles {
+                    assert!((a[axis] - chunk.edge_planes[edge]).abs() < 1e-6);
+                    assert!((b - a).cross(c - a)[axis] * sign > 0.0, "edge {edge} faces the wrong way");
+                }
+            }
+        }
     }
 
     proptest::proptest! {
@@ -554,13 +632,12 @@ mod tests {
             let f = field(columns, rows, levels);
             let mesh = TerrainMesh::new(&f);
             for level in mesh.chunks.iter().flat_map(|c| &c.levels) {
-                let end = (level.first_index + level.index_count) as usize;
-                let indices = &mesh.indices[level.first_index as usize..end];
-                proptest::prop_assert!(indices.iter().all(|&i| u32::from(i) < level.vertex_count));
-                for [a, b, c] in mesh.triangles(level, 0..level.index_count) {
-                    proptest::prop_assert!(a.y >= 0.0 && b.y >= 0.0 && c.y >= 0.0, "below the water");
+                for range in level.ranges() {
+                    for [a, b, c] in mesh.triangles(range) {
+                        proptest::prop_assert!(a.y >= 0.0 && b.y >= 0.0 && c.y >= 0.0, "below the water");
+                    }
                 }
-                for [a, b, c] in mesh.triangles(level, 0..level.surface_indices) {
+                for [a, b, c] in mesh.triangles(&level.surface) {
                     proptest::prop_assert!((b - a).cross(c - a).y >= -1e-6, "a surface triangle faces down");
                 }
             }
@@ -592,40 +669,36 @@ mod tests {
             })
             .collect();
         let mesh = TerrainMesh::new(&field(257, 257, levels));
-        let level_of = |range: &DrawRange| {
+        // The chunk and level a range belongs to.
+        let owner = |range: &DrawRange| {
             mesh.chunks
                 .iter()
-                .flat_map(|c| c.levels.iter().enumerate())
-                .find(|(_, l)| l.first_index == range.first_index && l.base_vertex == range.base_vertex)
-                .map(|(i, _)| i)
+                .enumerate()
+                .flat_map(|(c, chunk)| chunk.levels.iter().enumerate().map(move |(l, level)| (c, l, level)))
+                .find(|(_, _, level)| level.ranges().any(|r| r == range))
+                .map(|(c, l, _)| (c, l))
                 .expect("a chunk level")
         };
         // From above the middle looking at the horizon toward -z: the near chunks are fine,
         // the far ones coarse, and the ones behind are culled.
         let pose = CameraPose::new(Vec3::new(0.0, 2.5, 0.0), 0.0, -10.0);
-        let chosen = mesh.select(&view(false, pose));
-        assert!(chosen.len() < mesh.chunks.len(), "nothing was culled");
-        let levels: Vec<usize> = chosen.iter().map(level_of).collect();
+        let v = view(false, pose);
+        let chosen = mesh.select(&v);
+        let surfaces: Vec<&DrawRange> =
+            chosen.iter().filter(|r| mesh.chunks[owner(r).0].levels[owner(r).1].surface == **r).collect();
+        assert!(surfaces.len() < mesh.chunks.len(), "nothing was culled");
+        let levels: Vec<usize> = surfaces.iter().map(|r| owner(r).1).collect();
         assert!(levels.contains(&0) && levels.iter().any(|&l| l > 0), "{levels:?}");
         // Every choice keeps its error within a pixel.
-        let v = view(false, pose);
         for range in &chosen {
-            let chunk = mesh
-                .chunks
-                .iter()
-                .find(|c| c.levels.iter().any(|l| l.first_index == range.first_index))
-                .expect("chunk");
-            let level = &chunk.levels[level_of(range)];
+            let (c, l) = owner(range);
+            let chunk = &mesh.chunks[c];
             let distance = (v.eye.clamp(chunk.min, chunk.max) - v.eye).length();
-            assert!(level.error * v.pixels_per_unit / distance <= 1.0 + 1e-4 || level_of(range) == 0);
+            assert!(chunk.levels[l].error * v.pixels_per_unit / distance <= 1.0 + 1e-4 || l == 0);
         }
-        // Nearest first.
+        // Nearest first, each chunk's ranges together.
         let centre_distance = |range: &DrawRange| {
-            let chunk = mesh
-                .chunks
-                .iter()
-                .find(|c| c.levels.iter().any(|l| l.base_vertex == range.base_vertex))
-                .expect("chunk");
+            let chunk = &mesh.chunks[owner(range).0];
             ((chunk.min + chunk.max) * 0.5 - v.eye).length()
         };
         assert!(chosen.windows(2).all(|w| centre_distance(&w[0]) <= centre_distance(&w[1])));
@@ -637,6 +710,28 @@ mod tests {
     }
 
     #[test]
+    fn only_the_skirt_strips_facing_the_camera_are_drawn() {
+        let mesh = TerrainMesh::new(&field(97, 97, vec![180.0; 97 * 97]));
+        for (pose, mirrored) in [
+            (CameraPose::new(Vec3::new(-3.0, 4.0, 2.0), 30.0, -30.0), false),
+            (CameraPose::new(Vec3::new(1.0, 6.0, -2.0), 200.0, -60.0), true),
+        ] {
+            let chosen = mesh.select(&view(mirrored, pose));
+            for chunk in &mesh.chunks {
+                let level = chunk.levels.iter().find(|l| chosen.contains(&l.surface));
+                let Some(level) = level else { continue };
+                for (edge, strips) in level.skirts.iter().enumerate() {
+                    let eye = if edge < 2 { pose.position.z } else { pose.position.x };
+                    // The strip facing the camera is drawn, the other (a back face) is not.
+                    let facing = usize::from(eye > chunk.edge_planes[edge]);
+                    assert!(chosen.contains(&strips[facing]), "edge {edge}");
+                    assert!(!chosen.contains(&strips[1 - facing]), "edge {edge}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn the_mirrored_pass_tests_mirrored_chunks() {
         let mesh = TerrainMesh::new(&field(33, 33, vec![250.0; 33 * 33]));
         // High above the land looking straight up: the land is behind, its mirror image further.
@@ -645,7 +740,8 @@ mod tests {
         assert!(mesh.select(&view(true, up)).is_empty());
         // Looking down, both the land and its mirror image are ahead.
         let down = CameraPose::new(Vec3::new(0.0, 5.0, 0.0), 0.0, -89.0);
-        assert_eq!(mesh.select(&view(false, down)).len(), 1);
-        assert_eq!(mesh.select(&view(true, down)).len(), 1);
+        // One chunk: its surface and one strip of each of its four skirts.
+        assert_eq!(mesh.select(&view(false, down)).len(), 5);
+        assert_eq!(mesh.select(&view(true, down)).len(), 5);
     }
 }

@@ -10,6 +10,7 @@ pub mod heightfield;
 pub mod heightmap;
 pub mod mesh;
 pub mod procedural;
+pub mod quadtree;
 
 use std::path::{Path, PathBuf};
 
@@ -161,6 +162,46 @@ pub struct World {
     pub sky: SkyBox,
     /// The water texture, repeated over the sea; it should tile seamlessly.
     pub water: RgbaImage,
+    /// The colour map without its baked hill shading and the sky without its painted sun, for
+    /// the modern look, which lights the scene itself (the procedural world has them; images
+    /// from elsewhere are used as they are).
+    pub unlit: Option<UnlitLayers>,
+}
+
+/// Layers of a world without the light painted into them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UnlitLayers {
+    /// The colour map's albedo: its colours before hill shading.
+    pub albedo_map: RgbaImage,
+    /// The sky box without the sun's disc and glow.
+    pub sky: SkyBox,
+}
+
+impl World {
+    /// The colour map the modern look lights: the albedo where there is one.
+    pub fn albedo_map(&self) -> &RgbaImage {
+        self.unlit.as_ref().map_or(&self.colour_map, |unlit| &unlit.albedo_map)
+    }
+
+    /// The sky the modern look grades for its sun: the one without a painted sun where there is
+    /// one.
+    pub fn clear_sky(&self) -> &SkyBox {
+        self.unlit.as_ref().map_or(&self.sky, |unlit| &unlit.sky)
+    }
+
+    /// Bytes of memory the world's data takes (heightmap and images).
+    pub fn memory_bytes(&self) -> usize {
+        let image = |image: &RgbaImage| image.as_raw().len();
+        let sky = |sky: &SkyBox| sky.faces().iter().map(|face| image(face)).sum::<usize>();
+        let heights = self.heightmap.levels().len() * self.heightmap.bytes_per_sample();
+        let unlit = self.unlit.as_ref().map_or(0, |u| image(&u.albedo_map) + sky(&u.sky));
+        heights
+            + image(&self.colour_map)
+            + image(&self.detail_map)
+            + sky(&self.sky)
+            + image(&self.water)
+            + unlit
+    }
 }
 
 /// Largest side of any image the world loads, in pixels (sky faces and colour maps; heightmaps

@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use image::{Rgba, RgbaImage};
-use terrain::SceneConfig;
 use terrain::camera::CameraPose;
 use terrain::headless::render_image;
 use terrain::render::{Backend, FrameView, Gpu};
 use terrain::world::{Heightmap, SkyBox, World};
+use terrain::{SceneConfig, Settings};
 
 /// Whether the tests run under CI (`CI` set to anything but `false` or empty), where a missing
 /// GPU or missing course assets are failures rather than skips.
@@ -77,13 +77,33 @@ pub fn view_from(position: [f32; 3], yaw: f32, pitch: f32) -> FrameView {
     }
 }
 
-/// Renders `world` with the course's numbers.
+/// Renders `world` with the course's numbers, in the course's look.
 pub fn render(gpu: &Gpu, world: &World, size: (u32, u32), view: &FrameView) -> RgbaImage {
-    render_image(gpu, world, &SceneConfig::default(), size, view).expect("renders")
+    render_with(gpu, world, &Settings::course(), size, view)
+}
+
+/// Renders `world` with the course's numbers and `settings`.
+pub fn render_with(
+    gpu: &Gpu,
+    world: &World,
+    settings: &Settings,
+    size: (u32, u32),
+    view: &FrameView,
+) -> RgbaImage {
+    render_image(gpu, world, &SceneConfig::default(), settings, size, view).expect("renders")
 }
 
 fn flat(colour: [u8; 3], size: u32) -> RgbaImage {
     RgbaImage::from_pixel(size, size, Rgba([colour[0], colour[1], colour[2], 255]))
+}
+
+/// The default procedural island (seed 1, 512 x 512), generated once per test binary.
+pub fn default_island() -> &'static World {
+    static WORLD: OnceLock<World> = OnceLock::new();
+    WORLD.get_or_init(|| {
+        terrain::world::procedural::generate(Default::default(), &SceneConfig::default(), &mut |_| {})
+            .expect("default world")
+    })
 }
 
 /// A world of flat colours that makes every part of the picture identifiable: land pure red, sky
@@ -100,6 +120,7 @@ pub fn marker_world(detail_grey: u8) -> World {
         detail_map: flat([detail_grey; 3], 16),
         sky: SkyBox { sides: [green.clone(), green.clone(), green.clone(), green.clone()], top: green },
         water: flat([0, 0, 255], 8),
+        unlit: None,
     }
 }
 

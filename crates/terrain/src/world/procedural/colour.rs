@@ -6,7 +6,7 @@ use image::RgbaImage;
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 
 use super::SUN_DIRECTION;
-use super::field::{image_from_fn, layer_seed, mix, smoothstep, to_pixel};
+use super::field::{grid_from_fn_with_progress, layer_seed, mix, smoothstep, to_pixel};
 use crate::config::SceneConfig;
 use crate::world::{Heightfield, Heightmap};
 
@@ -39,55 +39,101 @@ pub fn colour_map_size(columns: u32, rows: u32) -> (u32, u32) {
 /// Paints the colour map of `heightmap` (placed with `config`) for `seed`. Bit-identical for the
 /// same arguments.
 pub fn colour_map(heightmap: &Heightmap, config: &SceneConfig, seed: u32) -> RgbaImage {
-    let field = Heightfield::new(heightmap, config);
+    colour_maps(heightmap, config, seed, &mut |_| {}).0
+}
+
+/// The colour map of [`colour_map`] and its albedo (the same colours before the hill shading), in
+/// one pass, calling `progress` with the fraction done (0 to 1) as it goes.
+pub fn colour_maps(
+    heightmap: &Heightmap,
+    config: &SceneConfig,
+    seed: u32,
+    progress: &mut dyn FnMut(f32),
+) -> (RgbaImage, RgbaImage) {
+    let field = Heights { map: heightmap, config };
     let (width, height) = colour_map_size(heightmap.columns(), heightmap.rows());
     let patches = Fbm::<Perlin>::new(layer_seed(seed, 20)).set_octaves(5);
     let grain = Fbm::<Perlin>::new(layer_seed(seed, 21)).set_octaves(4);
     let bands = Perlin::new(layer_seed(seed, 22));
     let sun = DVec3::from(SUN_DIRECTION).normalize();
     let (columns, rows) = (heightmap.columns(), heightmap.rows());
-    let cell = f64::from(field.cell_size());
-    image_from_fn(width, height, |x, y| {
-        // This texel's centre in sample coordinates (sample centres at whole numbers).
-        let column = (x as f64 + 0.5) / width as f64 * columns as f64 - 0.5;
-        let row = (y as f64 + 0.5) / height as f64 * rows as f64 - 0.5;
-        let h = sample(&field, column, row);
-        let slope_x = (sample(&field, column + 1.0, row) - sample(&field, column - 1.0, row)) / (2.0 * cell);
-        let slope_z = (sample(&field, column, row + 1.0) - sample(&field, column, row - 1.0)) / (2.0 * cell);
-        let normal = DVec3::new(-slope_x, 1.0, -slope_z).normalize();
-        let steepness = 1.0 - normal.y; // 0 flat, ~0.3 at 45 degrees
-        // Noise in map coordinates (u, v in 0..1), independent of the map's resolution.
-        let (u, v) = (x as f64 / width as f64, y as f64 / height as f64);
-        let patch = patches.get([u * 9.0, v * 9.0]);
-        let fine = grain.get([u * 60.0, v * 60.0]);
-        let band = bands.get([h * 2.5, u * 4.0, v * 4.0]);
+    let cell = f64::from(Heightfield::cell_size_of(heightmap, config));
+    let texels = grid_from_fn_with_progress(
+        width,
+        height,
+        |x, y| {
+            // This texel's centre in sample coordinates (sample centres at whole numbers).
+            let column = (x as f64 + 0.5) / width as f64 * columns as f64 - 0.5;
+            let row = (y as f64 + 0.5) / height as f64 * rows as f64 - 0.5;
+            let h = sample(&field, column, row);
+            let slope_x =
+                (sample(&field, column + 1.0, row) - sample(&field, column - 1.0, row)) / (2.0 * cell);
+            let slope_z =
+                (sample(&field, column, row + 1.0) - sample(&field, column, row - 1.0)) / (2.0 * cell);
+            let normal = DVec3::new(-slope_x, 1.0, -slope_z).normalize();
+            let steepness = 1.0 - normal.y; // 0 flat, ~0.3 at 45 degrees
+            // Noise in map coordinates (u, v in 0..1), independent of the map's resolution.
+            let (u, v) = (x as f64 / width as f64, y as f64 / height as f64);
+            let patch = patches.get([u * 9.0, v * 9.0]);
+            let fine = grain.get([u * 60.0, v * 60.0]);
+            let band = bands.get([h * 2.5, u * 4.0, v * 4.0]);
 
-        // Lowland: grass of varying shade, with darker woods in patches.
-        let grass = mix(GRASS_LIGHT, GRASS_DARK, smoothstep(-0.5, 0.6, patch + 0.3 * fine));
-        let mut colour = mix(grass, FOREST, smoothstep(0.15, 0.45, patch) * (1.0 - smoothstep(1.0, 1.5, h)));
-        // Rock on steep ground and above the tree line, banded like strata.
-        let rock = mix(ROCK_LIGHT, ROCK_DARK, smoothstep(-0.6, 0.6, band + 0.5 * fine));
-        let rockiness =
-            smoothstep(0.06, 0.16, steepness + 0.03 * fine).max(smoothstep(1.25, 1.6, h + 0.15 * patch));
-        colour = mix(colour, rock, rockiness);
-        // Snow on the peaks, sliding off the steepest faces.
-        let snow = smoothstep(1.75, 1.95, h + 0.12 * patch + 0.05 * fine)
-            * (1.0 - smoothstep(0.20, 0.35, steepness));
-        colour = mix(colour, SNOW, snow);
-        // Beach: sand just above the water, wet sand at the waterline, seabed below.
-        let shore = 0.10 + 0.06 * patch;
-        let sand = mix(WET_SAND, SAND, smoothstep(0.0, 0.05, h));
-        colour = mix(sand, colour, smoothstep(shore, shore + 0.08, h));
-        colour = mix(SEABED, colour, smoothstep(-0.15, 0.0, h));
+            // Lowland: grass of varying shade, with darker woods in patches.
+            let grass = mix(GRASS_LIGHT, GRASS_DARK, smoothstep(-0.5, 0.6, patch + 0.3 * fine));
+            let mut colour =
+                mix(grass, FOREST, smoothstep(0.15, 0.45, patch) * (1.0 - smoothstep(1.0, 1.5, h)));
+            // Rock on steep ground and above the tree line, banded like strata.
+            let rock = mix(ROCK_LIGHT, ROCK_DARK, smoothstep(-0.6, 0.6, band + 0.5 * fine));
+            let rockiness =
+                smoothstep(0.06, 0.16, steepness + 0.03 * fine).max(smoothstep(1.25, 1.6, h + 0.15 * patch));
+            colour = mix(colour, rock, rockiness);
+            // Snow on the peaks, sliding off the steepest faces.
+            let snow = smoothstep(1.75, 1.95, h + 0.12 * patch + 0.05 * fine)
+                * (1.0 - smoothstep(0.20, 0.35, steepness));
+            colour = mix(colour, SNOW, snow);
+            // Beach: sand just above the water, wet sand at the waterline, seabed below.
+            let shore = 0.10 + 0.06 * patch;
+            let sand = mix(WET_SAND, SAND, smoothstep(0.0, 0.05, h));
+            colour = mix(sand, colour, smoothstep(shore, shore + 0.08, h));
+            colour = mix(SEABED, colour, smoothstep(-0.15, 0.0, h));
 
-        // Hill shading from the sun, plus a little grain so flat areas are not uniform.
-        let light = 0.58 + 0.62 * normal.dot(sun).max(0.0) + 0.04 * fine;
-        to_pixel(colour.map(|c| c * light))
-    })
+            // Hill shading from the sun, plus a little grain so flat areas are not uniform.
+            let light = 0.58 + 0.62 * normal.dot(sun).max(0.0) + 0.04 * fine;
+            (to_pixel(colour.map(|c| c * light)), to_pixel(colour.map(|c| c * (0.96 + 0.04 * fine))))
+        },
+        progress,
+    );
+    let (shaded, albedo): (Vec<[u8; 4]>, Vec<[u8; 4]>) = texels.into_iter().unzip();
+    let image = |texels: Vec<[u8; 4]>| {
+        RgbaImage::from_raw(width, height, texels.into_iter().flatten().collect())
+            .expect("buffer sized width * height * 4")
+    };
+    (image(shaded), image(albedo))
+}
+
+/// World heights read straight from a heightmap (no copy of a large map).
+struct Heights<'a> {
+    map: &'a Heightmap,
+    config: &'a SceneConfig,
+}
+
+impl Heights<'_> {
+    fn columns(&self) -> u32 {
+        self.map.columns()
+    }
+
+    fn rows(&self) -> u32 {
+        self.map.rows()
+    }
+
+    /// World height of a sample, computed as [`Heightfield`] stores it.
+    fn height(&self, row: u32, column: u32) -> f32 {
+        self.config.height_of_level(self.map.level(row, column))
+    }
 }
 
 /// World height at fractional sample coordinates, clamped to the grid, interpolated bilinearly.
-fn sample(field: &Heightfield, column: f64, row: f64) -> f64 {
+fn sample(field: &Heights<'_>, column: f64, row: f64) -> f64 {
     let column = column.clamp(0.0, f64::from(field.columns() - 1));
     let row = row.clamp(0.0, f64::from(field.rows() - 1));
     let (c0, r0) =
@@ -150,6 +196,23 @@ mod tests {
         let spread =
             rock.iter().copied().fold(f64::MIN, f64::max) - rock.iter().copied().fold(f64::MAX, f64::min);
         assert!(spread < 0.12, "rock should be greyish: {rock:?}");
+    }
+
+    #[test]
+    fn the_albedo_is_the_colour_without_hill_shading() {
+        let config = SceneConfig::default();
+        // A ridge: one slope faces the sun, the other faces away.
+        let levels = (0..32 * 32).map(|i| 200.0 - 6.0 * ((i % 32) as f32 - 16.0).abs()).collect();
+        let ridge = Heightmap::new(32, 32, levels).expect("valid");
+        let (shaded, albedo) = colour_maps(&ridge, &config, 1, &mut |_| {});
+        assert_eq!(shaded, colour_map(&ridge, &config, 1));
+        let brightness = |image: &RgbaImage, x: u32| -> f64 {
+            (8..56).map(|y| image.get_pixel(x, y).0[..3].iter().map(|&c| f64::from(c)).sum::<f64>()).sum()
+        };
+        // The shaded map tells the slopes apart much more than the albedo.
+        let shaded_contrast = (brightness(&shaded, 12) / brightness(&shaded, 52)).ln().abs();
+        let albedo_contrast = (brightness(&albedo, 12) / brightness(&albedo, 52)).ln().abs();
+        assert!(shaded_contrast > 3.0 * albedo_contrast, "{shaded_contrast} vs {albedo_contrast}");
     }
 
     #[test]

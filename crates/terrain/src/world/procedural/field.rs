@@ -53,15 +53,24 @@ pub fn to_pixel(colour: [f64; 3]) -> [u8; 4] {
     [byte(colour[0]), byte(colour[1]), byte(colour[2]), 255]
 }
 
+/// Rows computed between two progress reports by [`grid_from_fn_with_progress`].
+const ROWS_PER_BAND: usize = 64;
+
 /// An image whose pixel (x, y) is `pixel(x, y)`, computed row by row in parallel. The result
 /// does not depend on the number of threads.
 pub fn image_from_fn(width: u32, height: u32, pixel: impl Fn(u32, u32) -> [u8; 4] + Sync) -> RgbaImage {
-    let mut data = vec![0u8; width as usize * height as usize * 4];
-    data.par_chunks_mut(width as usize * 4).enumerate().for_each(|(y, row)| {
-        for (x, out) in row.chunks_exact_mut(4).enumerate() {
-            out.copy_from_slice(&pixel(x as u32, y as u32));
-        }
-    });
+    image_from_fn_with_progress(width, height, pixel, &mut |_| {})
+}
+
+/// [`image_from_fn`], calling `progress` with the fraction of rows done (0 to 1) as it goes.
+pub fn image_from_fn_with_progress(
+    width: u32,
+    height: u32,
+    pixel: impl Fn(u32, u32) -> [u8; 4] + Sync,
+    progress: &mut dyn FnMut(f32),
+) -> RgbaImage {
+    let texels = grid_from_fn_with_progress(width, height, pixel, progress);
+    let data = texels.into_iter().flatten().collect();
     RgbaImage::from_raw(width, height, data).expect("buffer sized width * height * 4")
 }
 
@@ -71,12 +80,31 @@ pub fn grid_from_fn<T: Copy + Default + Send>(
     height: u32,
     value: impl Fn(u32, u32) -> T + Sync,
 ) -> Vec<T> {
-    let mut data = vec![T::default(); width as usize * height as usize];
-    data.par_chunks_mut(width as usize).enumerate().for_each(|(y, row)| {
-        for (x, out) in row.iter_mut().enumerate() {
-            *out = value(x as u32, y as u32);
-        }
-    });
+    grid_from_fn_with_progress(width, height, value, &mut |_| {})
+}
+
+/// [`grid_from_fn`], calling `progress` with the fraction of rows done (0 to 1) after each band
+/// of rows. Bands are computed one after the other, the rows of a band in parallel (the only
+/// place the generators use threads: a single-threaded build would loop here instead).
+pub fn grid_from_fn_with_progress<T: Copy + Default + Send>(
+    width: u32,
+    height: u32,
+    value: impl Fn(u32, u32) -> T + Sync,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<T> {
+    let row_length = width as usize;
+    let mut data = vec![T::default(); row_length * height as usize];
+    let band_length = row_length * ROWS_PER_BAND;
+    let bands = data.len().div_ceil(band_length.max(1));
+    for (band, rows) in data.chunks_mut(band_length.max(1)).enumerate() {
+        let first_row = band * ROWS_PER_BAND;
+        rows.par_chunks_mut(row_length).enumerate().for_each(|(y, row)| {
+            for (x, out) in row.iter_mut().enumerate() {
+                *out = value(x as u32, (first_row + y) as u32);
+            }
+        });
+        progress((band + 1) as f32 / bands as f32);
+    }
     data
 }
 
@@ -96,6 +124,19 @@ mod tests {
         }
         // And it varies.
         assert!((noise.get(0.1, 0.2) - noise.get(0.3, 0.6)).abs() > 1e-3);
+    }
+
+    #[test]
+    fn grids_are_filled_row_by_row_with_progress() {
+        let mut reports = Vec::new();
+        let grid = grid_from_fn_with_progress(3, 130, |x, y| x + 10 * y, &mut |done| reports.push(done));
+        assert_eq!(grid.len(), 390);
+        assert_eq!(grid[3 * 129 + 2], 1292);
+        // 130 rows in bands of 64: three reports, the last one complete.
+        assert_eq!(reports.len(), 3);
+        assert!(reports.windows(2).all(|w| w[0] < w[1]) && reports[2] == 1.0);
+        let image = image_from_fn(2, 1, |x, _| [x as u8, 1, 2, 3]);
+        assert_eq!(image.as_raw(), &[0, 1, 2, 3, 1, 1, 2, 3]);
     }
 
     #[test]

@@ -3,8 +3,9 @@
 
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin, RidgedMulti};
 
-use super::field::{grid_from_fn, layer_seed, smoothstep};
+use super::field::{grid_from_fn_with_progress, layer_seed, smoothstep};
 use crate::config::SceneConfig;
+use crate::world::heightmap::sixteen_of_level;
 use crate::world::{Heightmap, HeightmapError};
 
 /// Distance from the map's centre to the coast, in map half-widths, before the coast's noise.
@@ -20,34 +21,47 @@ const SUMMIT_ROUNDING: f64 = 0.12;
 /// Rank of the highest peaks among the map's samples, as a fraction: all but the top 0.05%.
 const PEAK_QUANTILE: f64 = 0.9995;
 
-/// Generates a `size` x `size` island heightmap for `seed`, in grey levels placed with `config`'s
-/// height mapping (the coast is at the level of y = 0). Bit-identical for the same arguments.
-pub fn island_heightmap(seed: u32, size: u32, config: &SceneConfig) -> Result<Heightmap, HeightmapError> {
-    // Reject bad sizes before the work.
-    Heightmap::check_size(size, size)?;
-    let warp_x = Fbm::<Perlin>::new(layer_seed(seed, 1)).set_octaves(4);
-    let warp_z = Fbm::<Perlin>::new(layer_seed(seed, 2)).set_octaves(4);
-    let hills = Fbm::<Perlin>::new(layer_seed(seed, 3)).set_octaves(5);
-    let ridges = RidgedMulti::<Perlin>::new(layer_seed(seed, 4)).set_octaves(5);
-    let massifs = Fbm::<Perlin>::new(layer_seed(seed, 6)).set_octaves(3);
-    let coast = Fbm::<Perlin>::new(layer_seed(seed, 5)).set_octaves(5);
-    let lowest = config.level_of_height(-1.2) as f64;
-    let highest = config.level_of_height(MAX_HEIGHT as f32) as f64;
-    let scale = 2.0 / size as f64;
-    let elevations = grid_from_fn(size, size, |x, y| {
-        // Position in [-1, 1]^2, pixel centres.
-        let px = (x as f64 + 0.5) * scale - 1.0;
-        let pz = (y as f64 + 0.5) * scale - 1.0;
+/// Largest heightmap side generated sample by sample. Larger islands evaluate the island's
+/// shape on a grid of this side, resample it bicubically and add finer noise: the shape's noise
+/// has no features this grid cannot hold, and the full evaluation would cost 16 times as much at
+/// 8193 samples a side (see [`island_heightmap`]).
+pub const EXACT_SIDE: u32 = 2049;
+
+/// The noise layers of one island.
+struct IslandNoise {
+    warp_x: Fbm<Perlin>,
+    warp_z: Fbm<Perlin>,
+    hills: Fbm<Perlin>,
+    ridges: RidgedMulti<Perlin>,
+    massifs: Fbm<Perlin>,
+    coast: Fbm<Perlin>,
+}
+
+impl IslandNoise {
+    fn new(seed: u32) -> Self {
+        Self {
+            warp_x: Fbm::<Perlin>::new(layer_seed(seed, 1)).set_octaves(4),
+            warp_z: Fbm::<Perlin>::new(layer_seed(seed, 2)).set_octaves(4),
+            hills: Fbm::<Perlin>::new(layer_seed(seed, 3)).set_octaves(5),
+            ridges: RidgedMulti::<Perlin>::new(layer_seed(seed, 4)).set_octaves(5),
+            massifs: Fbm::<Perlin>::new(layer_seed(seed, 6)).set_octaves(3),
+            coast: Fbm::<Perlin>::new(layer_seed(seed, 5)).set_octaves(5),
+        }
+    }
+
+    /// The island's base height and its mountains' height (before their scaling) at (`px`,
+    /// `pz`) in [-1, 1]^2, in world units.
+    fn elevation(&self, px: f64, pz: f64) -> (f64, f64) {
         // Domain warp: bends coasts and valleys so they do not look like blobs of noise.
-        let qx = px + 0.22 * warp_x.get([px * 1.3, pz * 1.3]);
-        let qz = pz + 0.22 * warp_z.get([px * 1.3 + 5.2, pz * 1.3 + 1.7]);
+        let qx = px + 0.22 * self.warp_x.get([px * 1.3, pz * 1.3]);
+        let qz = pz + 0.22 * self.warp_z.get([px * 1.3 + 5.2, pz * 1.3 + 1.7]);
         // Signed distance to a ragged coast, in map half-widths: positive inland.
         // A squircle rather than a circle: the island fills more of the square map while its
         // border stays under water.
-        let radius = (qx.powi(4) + qz.powi(4)).sqrt().sqrt() + 0.20 * coast.get([qx * 2.2, qz * 2.2]);
+        let radius = (qx.powi(4) + qz.powi(4)).sqrt().sqrt() + 0.20 * self.coast.get([qx * 2.2, qz * 2.2]);
         let inland = COAST_RADIUS - radius;
-        let hill = hills.get([qx * 2.6, qz * 2.6]);
-        let ridge = ((ridges.get([qx * 0.9 + 3.1, qz * 0.9 - 2.3]) + 1.0) * 0.5).max(0.0);
+        let hill = self.hills.get([qx * 2.6, qz * 2.6]);
+        let ridge = ((self.ridges.get([qx * 0.9 + 3.1, qz * 0.9 - 2.3]) + 1.0) * 0.5).max(0.0);
         // World height: a slope through the coastline that levels off into rolling lowlands
         // inland and into a sea floor offshore, with ridged mountains further inland.
         let lowland = 0.42 + 0.45 * hill;
@@ -57,21 +71,142 @@ pub fn island_heightmap(seed: u32, size: u32, config: &SceneConfig) -> Result<He
         // Mountains rise where a broad noise is high, so they are rounded where it peaks and
         // slope gently where it falls (masks would make flat tops and cliffs); ridged noise
         // only sharpens their crests.
-        let uplift = (massifs.get([qx * 1.1 + 7.3, qz * 1.1 - 4.1]) + 0.1).max(0.0);
+        let uplift = (self.massifs.get([qx * 1.1 + 7.3, qz * 1.1 - 4.1]) + 0.1).max(0.0);
         let mountains = uplift.powf(2.0) * (0.55 + 0.45 * ridge) * smoothstep(0.0, 0.35, inland);
         (base, mountains)
-    });
+    }
+}
+
+/// The base and mountain heights on a `size` x `size` grid of pixel centres, and the scale that
+/// brings the highest peaks (all but the top 0.05% of the map) to `PEAK_HEIGHT`: whatever the
+/// seed, every island gets snow-capped summits and none is cut flat.
+fn elevations(noise: &IslandNoise, size: u32, progress: &mut dyn FnMut(f32)) -> (Vec<(f64, f64)>, f64) {
+    let scale = 2.0 / size as f64;
+    let elevations = grid_from_fn_with_progress(
+        size,
+        size,
+        |x, y| {
+            // Position in [-1, 1]^2, pixel centres.
+            let px = (x as f64 + 0.5) * scale - 1.0;
+            let pz = (y as f64 + 0.5) * scale - 1.0;
+            noise.elevation(px, pz)
+        },
+        progress,
+    );
     let scale = mountain_scale(&elevations);
-    let levels = elevations
-        .into_iter()
-        .map(|(base, mountain)| {
-            let height = base + mountain * scale;
-            // Peaks round off just below the top of the height range.
-            let height = -smooth_max(-height, -MAX_HEIGHT, SUMMIT_ROUNDING);
-            f64::from(config.level_of_height(height as f32)).clamp(lowest, highest) as f32
-        })
-        .collect();
-    Heightmap::new(size, size, levels)
+    (elevations, scale)
+}
+
+/// Generates a `size` x `size` island heightmap for `seed`, in grey levels placed with `config`'s
+/// height mapping (the coast is at the level of y = 0). Bit-identical for the same arguments.
+///
+/// Up to [`EXACT_SIDE`] samples a side, every sample is evaluated from the noise and kept as an
+/// `f32` level. Larger maps take the shape from a grid of [`EXACT_SIDE`] samples, resampled
+/// bicubically, and add one octave of fine noise per doubling beyond it (rougher on mountains,
+/// none at the shore, so beaches stay smooth); they are kept as 16-bit values (2 bytes a
+/// sample, steps of 1/257 grey level). `progress` hears the fraction done (0 to 1).
+pub fn island_heightmap(
+    seed: u32,
+    size: u32,
+    config: &SceneConfig,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Heightmap, HeightmapError> {
+    island_with_exact_side(seed, size, EXACT_SIDE, config, progress)
+}
+
+/// [`island_heightmap`] with the largest exactly evaluated side as a parameter (tests use a small
+/// one).
+fn island_with_exact_side(
+    seed: u32,
+    size: u32,
+    exact_side: u32,
+    config: &SceneConfig,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Heightmap, HeightmapError> {
+    // Reject bad sizes before the work.
+    Heightmap::check_size(size, size)?;
+    let noise = IslandNoise::new(seed);
+    let lowest = config.level_of_height(-1.2) as f64;
+    let highest = config.level_of_height(MAX_HEIGHT as f32) as f64;
+    let level_of = |height: f64| {
+        // Peaks round off just below the top of the height range.
+        let height = -smooth_max(-height, -MAX_HEIGHT, SUMMIT_ROUNDING);
+        f64::from(config.level_of_height(height as f32)).clamp(lowest, highest) as f32
+    };
+    if size <= exact_side {
+        let (elevations, scale) = elevations(&noise, size, progress);
+        let levels =
+            elevations.into_iter().map(|(base, mountain)| level_of(base + mountain * scale)).collect();
+        return Heightmap::new(size, size, levels);
+    }
+    // The shape on the coarse grid: a fifth of the work at 4097 samples, a sixteenth at 8193.
+    let coarse_share = 0.3;
+    let (elevations, scale) = elevations(&noise, exact_side, &mut |done| progress(done * coarse_share));
+    let shape = Grid {
+        side: exact_side as usize,
+        heights: elevations.into_iter().map(|(base, mountain)| base + mountain * scale).collect(),
+    };
+    let octaves = (size - 1).div_ceil(exact_side - 1).ilog2() as usize;
+    let detail = Fbm::<Perlin>::new(layer_seed(seed, 7)).set_octaves(octaves.max(1));
+    let to_coarse = exact_side as f64 / size as f64;
+    let step = 2.0 / size as f64;
+    let values = grid_from_fn_with_progress(
+        size,
+        size,
+        |x, y| {
+            // This sample's centre in the coarse grid's sample coordinates, and in [-1, 1]^2.
+            let (cx, cy) = ((x as f64 + 0.5) * to_coarse - 0.5, (y as f64 + 0.5) * to_coarse - 0.5);
+            let (px, pz) = ((x as f64 + 0.5) * step - 1.0, (y as f64 + 0.5) * step - 1.0);
+            let height = shape.bicubic(cx, cy);
+            let roughness =
+                smoothstep(0.08, 0.3, height.abs()) * (0.012 + 0.04 * smoothstep(0.4, 1.6, height));
+            let height = height + roughness * detail.get([px * DETAIL_FREQUENCY, pz * DETAIL_FREQUENCY]);
+            sixteen_of_level(level_of(height))
+        },
+        &mut |done| progress(coarse_share + done * (1.0 - coarse_share)),
+    );
+    Heightmap::from_sixteen_bit(size, size, values)
+}
+
+/// Cycles per map half-width of the first octave of fine noise large maps add (then twice as
+/// many per octave): 80 is about 13 samples a cycle at [`EXACT_SIDE`] samples, finer than the
+/// shape's own noise.
+const DETAIL_FREQUENCY: f64 = 80.0;
+
+/// A square grid of heights, sampled between its points.
+struct Grid {
+    side: usize,
+    heights: Vec<f64>,
+}
+
+impl Grid {
+    /// Catmull-Rom bicubic interpolation at sample coordinates (`x`, `y`) (sample centres at whole
+    /// numbers), the grid's border extended outward.
+    fn bicubic(&self, x: f64, y: f64) -> f64 {
+        let last = self.side as isize - 1;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let at = |i: isize, j: isize| {
+            self.heights[(j.clamp(0, last) as usize) * self.side + i.clamp(0, last) as usize]
+        };
+        let weights = |t: f64| {
+            let (t2, t3) = (t * t, t * t * t);
+            [
+                -0.5 * t3 + t2 - 0.5 * t,
+                1.5 * t3 - 2.5 * t2 + 1.0,
+                -1.5 * t3 + 2.0 * t2 + 0.5 * t,
+                0.5 * t3 - 0.5 * t2,
+            ]
+        };
+        let (wx, wy) = (weights(fx), weights(fy));
+        let (x0, y0) = (x0 as isize, y0 as isize);
+        (0..4)
+            .map(|j| {
+                let row: f64 = (0..4).map(|i| wx[i] * at(x0 - 1 + i as isize, y0 - 1 + j as isize)).sum();
+                wy[j] * row
+            })
+            .sum()
+    }
 }
 
 /// The factor of the mountains that makes, whatever the seed, the highest peaks (all but the top
@@ -128,9 +263,9 @@ mod tests {
     #[test]
     fn deterministic_per_seed() {
         let config = SceneConfig::default();
-        let a = island_heightmap(3, 64, &config).expect("valid size");
-        let b = island_heightmap(3, 64, &config).expect("valid size");
-        let c = island_heightmap(4, 64, &config).expect("valid size");
+        let a = island_heightmap(3, 64, &config, &mut |_| {}).expect("valid size");
+        let b = island_heightmap(3, 64, &config, &mut |_| {}).expect("valid size");
+        let c = island_heightmap(4, 64, &config, &mut |_| {}).expect("valid size");
         assert_eq!(a, b);
         assert_ne!(a, c);
     }
@@ -139,10 +274,10 @@ mod tests {
     fn an_island_with_a_shore_in_a_sea() {
         let config = SceneConfig::default();
         for seed in [1, 2, 3, 42] {
-            let map = island_heightmap(seed, 128, &config).expect("valid size");
+            let map = island_heightmap(seed, 128, &config, &mut |_| {}).expect("valid size");
             let sea_level = config.level_of_height(0.0);
-            let levels = map.levels();
-            let under = levels.iter().filter(|&&l| l < sea_level).count() as f32 / levels.len() as f32;
+            let count = map.levels().len();
+            let under = map.levels().filter(|&l| l < sea_level).count() as f32 / count as f32;
             assert!((0.25..0.8).contains(&under), "seed {seed}: {under} of the map under water");
             // The whole border is sea.
             let n = map.columns();
@@ -152,9 +287,56 @@ mod tests {
                 }
             }
             // The centre region holds land that rises well above the shore.
-            let highest = levels.iter().copied().fold(f32::MIN, f32::max);
+            let highest = map.levels().fold(f32::MIN, f32::max);
             assert!(config.height_of_level(highest) > 1.0, "seed {seed}: flat island");
         }
+    }
+
+    #[test]
+    fn large_maps_follow_the_exact_shape_with_finer_detail() {
+        let config = SceneConfig::default();
+        // As 8193 samples relate to 2049, 513 relate to 129 (the map's shape from 129 samples a side).
+        let exact = island_heightmap(5, 129, &config, &mut |_| {}).expect("valid size");
+        let mut reports = Vec::new();
+        let large =
+            island_with_exact_side(5, 513, 129, &config, &mut |done| reports.push(done)).expect("valid size");
+        assert_eq!(large.bytes_per_sample(), 2);
+        assert!(reports.windows(2).all(|w| w[0] <= w[1]) && reports.last() == Some(&1.0));
+        // Sample (i, j) of the coarse map sits at sample coordinates ((i + 0.5) 513 / 129 - 0.5,
+        // ...) of the large one: the shapes agree there within the detail's amplitude.
+        let large_at = |row: f32, column: f32| {
+            let (r, c) = (row.floor() as u32, column.floor() as u32);
+            let (fr, fc) = (row - r as f32, column - c as f32);
+            let top = large.level(r, c) * (1.0 - fc) + large.level(r, c + 1) * fc;
+            let bottom = large.level(r + 1, c) * (1.0 - fc) + large.level(r + 1, c + 1) * fc;
+            top * (1.0 - fr) + bottom * fr
+        };
+        let to_large = |i: u32| (i as f32 + 0.5) * 513.0 / 129.0 - 0.5;
+        let mut worst = 0.0f32;
+        for i in 4..125 {
+            for j in 4..125 {
+                worst = worst.max((large_at(to_large(i), to_large(j)) - exact.level(i, j)).abs());
+            }
+        }
+        assert!(worst < 8.0, "the shapes differ by {worst} levels");
+        // Two octaves of detail (513 is 4 x 128 + 1) make the large map's land rougher than the
+        // same map evaluated sample by sample.
+        let full = island_with_exact_side(5, 513, 513, &config, &mut |_| {}).expect("valid size");
+        let roughness = |map: &Heightmap| {
+            let mut total = 0.0f64;
+            for r in 1..512 {
+                for c in 1..512 {
+                    if config.height_of_level(full.level(r, c)) > 0.6 {
+                        let curve = map.level(r, c - 1) - 2.0 * map.level(r, c) + map.level(r, c + 1);
+                        total += f64::from(curve.abs());
+                    }
+                }
+            }
+            total
+        };
+        assert!(roughness(&large) > 1.5 * roughness(&full), "{} vs {}", roughness(&large), roughness(&full));
+        let again = island_with_exact_side(5, 513, 129, &config, &mut |_| {}).expect("valid size");
+        assert_eq!(large, again, "not deterministic");
     }
 
     #[test]
@@ -164,15 +346,15 @@ mod tests {
         let config = SceneConfig::default();
         let top = config.level_of_height(MAX_HEIGHT as f32);
         for seed in 1..=12 {
-            let map = island_heightmap(seed, 256, &config).expect("valid size");
-            let flat = map.levels().iter().filter(|&&l| l >= top - 1e-3).count();
-            let fraction = flat as f64 / map.levels().len() as f64;
+            let map = island_heightmap(seed, 256, &config, &mut |_| {}).expect("valid size");
+            let flat = map.levels().filter(|&l| l >= top - 1e-3).count();
+            let fraction = flat as f64 / (map.columns() as f64 * map.rows() as f64);
             assert!(
                 fraction <= 1.0 - PEAK_QUANTILE,
                 "seed {seed}: {:.3}% of the map is cut flat",
                 100.0 * fraction
             );
-            let highest = map.levels().iter().copied().fold(f32::MIN, f32::max);
+            let highest = map.levels().fold(f32::MIN, f32::max);
             assert!(
                 config.height_of_level(highest) > PEAK_HEIGHT as f32 - 0.05,
                 "seed {seed}: no snowy peaks"
@@ -183,7 +365,10 @@ mod tests {
     #[test]
     fn rejects_sizes_a_heightmap_cannot_have() {
         let config = SceneConfig::default();
-        assert!(matches!(island_heightmap(1, 1, &config), Err(HeightmapError::TooSmall { .. })));
-        assert!(matches!(island_heightmap(1, 100_000, &config), Err(HeightmapError::TooLarge { .. })));
+        assert!(matches!(island_heightmap(1, 1, &config, &mut |_| {}), Err(HeightmapError::TooSmall { .. })));
+        assert!(matches!(
+            island_heightmap(1, 100_000, &config, &mut |_| {}),
+            Err(HeightmapError::TooLarge { .. })
+        ));
     }
 }

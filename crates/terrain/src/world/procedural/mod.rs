@@ -8,14 +8,16 @@ mod field;
 mod island;
 mod sky;
 mod water;
+mod waves;
 
-pub use colour::{MAX_COLOUR_MAP_SIDE, colour_map, colour_map_size};
+pub use colour::{MAX_COLOUR_MAP_SIDE, colour_map, colour_map_size, colour_maps};
 pub use detail::detail_map;
-pub use island::island_heightmap;
-pub use sky::sky_box;
+pub use island::{EXACT_SIDE, island_heightmap};
+pub use sky::{sky_box, sky_boxes};
 pub use water::water_texture;
+pub use waves::{WAVE_MAP_SIZE, wave_map};
 
-use super::{Heightmap, HeightmapError, World};
+use super::{Heightmap, HeightmapError, UnlitLayers, World};
 use crate::config::SceneConfig;
 
 /// Direction toward the sun (y-up, not normalised): 25 degrees high, ahead and to the left of the
@@ -76,35 +78,60 @@ impl Stage {
     }
 }
 
-/// Generates the whole procedural world, calling `progress` as each [`Stage`] starts.
+/// How far generation has got: the stage under way and the fraction of it done (0 when it
+/// starts, 1 when it ends).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// The part being generated.
+    pub stage: Stage,
+    /// Fraction of the stage done, 0 to 1.
+    pub done: f32,
+}
+
+impl Progress {
+    /// The fraction of all stages done (each stage counted as an equal part), 0 to 1.
+    pub fn overall(&self) -> f32 {
+        let index = Stage::ALL.iter().position(|&s| s == self.stage).unwrap_or(0);
+        (index as f32 + self.done.clamp(0.0, 1.0)) / Stage::ALL.len() as f32
+    }
+}
+
+/// Generates the whole procedural world, calling `progress` as each [`Stage`] starts and as it
+/// advances.
 pub fn generate(
     options: ProceduralOptions,
     config: &SceneConfig,
-    progress: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(Progress),
 ) -> Result<World, HeightmapError> {
-    progress(Stage::Heightmap);
-    let heightmap = island_heightmap(options.seed, options.heightmap_size, config)?;
+    progress(Progress { stage: Stage::Heightmap, done: 0.0 });
+    let heightmap = island_heightmap(options.seed, options.heightmap_size, config, &mut |done| {
+        progress(Progress { stage: Stage::Heightmap, done })
+    })?;
     Ok(dress_heightmap(heightmap, options.seed, config, progress))
 }
 
 /// A world around a given heightmap: the heightmap as is, with a colour map painted from its
 /// heights and slopes and generated detail, sky and water textures. Calls `progress` as each
-/// [`Stage`] after [`Stage::Heightmap`] starts.
+/// [`Stage`] after [`Stage::Heightmap`] starts and advances.
 pub fn dress_heightmap(
     heightmap: Heightmap,
     seed: u32,
     config: &SceneConfig,
-    progress: &mut dyn FnMut(Stage),
+    progress: &mut dyn FnMut(Progress),
 ) -> World {
-    progress(Stage::ColourMap);
-    let colour_map = colour_map(&heightmap, config, seed);
-    progress(Stage::DetailMap);
+    progress(Progress { stage: Stage::ColourMap, done: 0.0 });
+    let (colour_map, albedo_map) = colour_maps(&heightmap, config, seed, &mut |done| {
+        progress(Progress { stage: Stage::ColourMap, done })
+    });
+    progress(Progress { stage: Stage::DetailMap, done: 0.0 });
     let detail_map = detail_map(seed, DETAIL_MAP_SIZE);
-    progress(Stage::Sky);
-    let sky = sky_box(seed, SKY_FACE_SIZE, config);
-    progress(Stage::Water);
+    progress(Progress { stage: Stage::Sky, done: 0.0 });
+    let (sky, clear_sky) = sky_boxes(seed, SKY_FACE_SIZE, config);
+    progress(Progress { stage: Stage::Water, done: 0.0 });
     let water = water_texture(seed, WATER_TEXTURE_SIZE);
-    World { heightmap, colour_map, detail_map, sky, water }
+    progress(Progress { stage: Stage::Water, done: 1.0 });
+    let unlit = Some(UnlitLayers { albedo_map, sky: clear_sky });
+    World { heightmap, colour_map, detail_map, sky, water, unlit }
 }
 
 #[cfg(test)]
@@ -114,10 +141,18 @@ mod tests {
     #[test]
     fn generate_reports_every_stage_in_order() {
         let mut seen = Vec::new();
+        let mut overall = Vec::new();
         let options = ProceduralOptions { seed: 1, heightmap_size: 16 };
-        let world =
-            generate(options, &SceneConfig::default(), &mut |stage| seen.push(stage)).expect("valid size");
+        let world = generate(options, &SceneConfig::default(), &mut |progress| {
+            if progress.done == 0.0 {
+                seen.push(progress.stage);
+            }
+            overall.push(progress.overall());
+        })
+        .expect("valid size");
         assert_eq!(seen, Stage::ALL);
+        assert!(overall.windows(2).all(|w| w[0] <= w[1]), "{overall:?}");
+        assert_eq!(overall.last(), Some(&1.0));
         assert_eq!(world.heightmap.columns(), 16);
         assert_eq!(world.colour_map.dimensions(), (32, 32));
         assert_eq!(world.sky.top.dimensions(), (SKY_FACE_SIZE, SKY_FACE_SIZE));

@@ -6,7 +6,9 @@ use glam::DVec3;
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 
 use super::SUN_DIRECTION;
-use super::field::{image_from_fn, layer_seed, mix, smoothstep, to_pixel};
+use image::RgbaImage;
+
+use super::field::{grid_from_fn, layer_seed, mix, smoothstep, to_pixel};
 use crate::config::SceneConfig;
 use crate::world::{SkyBox, SkyFace};
 
@@ -19,19 +21,34 @@ const CLOUD_SHADE: [f64; 3] = [0.62, 0.67, 0.76];
 /// Generates the five faces, each `size` x `size`, for `seed`, matching the box of `config`.
 /// Bit-identical for the same arguments.
 pub fn sky_box(seed: u32, size: u32, config: &SceneConfig) -> SkyBox {
+    sky_boxes(seed, size, config).0
+}
+
+/// The sky of [`sky_box`] and the same sky without the sun's disc and glow (for a renderer that
+/// draws its own sun), in one pass.
+pub fn sky_boxes(seed: u32, size: u32, config: &SceneConfig) -> (SkyBox, SkyBox) {
     let sky = Sky::new(seed);
     let box_size = config.sky_box_size.as_dvec3();
     let paint = |face: SkyFace| {
-        image_from_fn(size, size, |x, y| {
+        let texels = grid_from_fn(size, size, |x, y| {
             let u = (x as f64 + 0.5) / size as f64;
             let v = (y as f64 + 0.5) / size as f64;
-            to_pixel(sky.colour(face.point(u, v, box_size).normalize()))
-        })
+            let (with_sun, clear) = sky.colours(face.point(u, v, box_size).normalize());
+            (to_pixel(with_sun), to_pixel(clear))
+        });
+        let (with_sun, clear): (Vec<[u8; 4]>, Vec<[u8; 4]>) = texels.into_iter().unzip();
+        let image = |texels: Vec<[u8; 4]>| {
+            RgbaImage::from_raw(size, size, texels.into_iter().flatten().collect())
+                .expect("buffer sized size * size * 4")
+        };
+        (image(with_sun), image(clear))
     };
-    SkyBox {
-        sides: [paint(SkyFace::Front), paint(SkyFace::Right), paint(SkyFace::Back), paint(SkyFace::Left)],
-        top: paint(SkyFace::Top),
-    }
+    let [front, right, back, left, top] =
+        [SkyFace::Front, SkyFace::Right, SkyFace::Back, SkyFace::Left, SkyFace::Top].map(paint);
+    (
+        SkyBox { sides: [front.0, right.0, back.0, left.0], top: top.0 },
+        SkyBox { sides: [front.1, right.1, back.1, left.1], top: top.1 },
+    )
 }
 
 /// The sky as a function of the viewing direction.
@@ -48,29 +65,30 @@ impl Sky {
         }
     }
 
-    /// Colour seen in unit direction `d` (d.y >= 0 above the horizon).
-    fn colour(&self, d: DVec3) -> [f64; 3] {
+    /// Colour seen in unit direction `d` (d.y >= 0 above the horizon), with the sun and
+    /// without it.
+    fn colours(&self, d: DVec3) -> ([f64; 3], [f64; 3]) {
         let elevation = d.y.max(0.0);
-        let mut colour = mix(HORIZON, ZENITH, elevation.powf(0.5));
+        let clear = mix(HORIZON, ZENITH, elevation.powf(0.5));
         // Sun: a bright disc inside a wide glow.
         let facing = d.dot(self.sun).max(0.0);
         let glow = 0.35 * facing.powi(8) + 0.6 * facing.powi(64) + smoothstep(0.9993, 0.9997, facing);
-        colour = mix(colour, SUN, glow.min(1.0));
+        let colour = mix(clear, SUN, glow.min(1.0));
         // Clouds on a flat layer above: density from noise at the point the ray meets the layer,
         // thinning toward the horizon where the layer's far parts would only add noise.
         let reach = 1.0 / (elevation + 0.06);
         let (cx, cz) = (d.x * reach * 1.1, d.z * reach * 1.1);
         let density = self.cloud_density(cx, cz);
         if density <= 0.0 {
-            return colour;
+            return (colour, clear);
         }
         // Lit from the sun's side: thinner toward the sun means a brighter edge.
         let toward_sun = self.cloud_density(cx + self.sun.x * 0.08, cz + self.sun.z * 0.08);
         let light = (0.65 + 2.5 * (density - toward_sun)).clamp(0.0, 1.0);
         let cloud = mix(CLOUD_SHADE, CLOUD_LIT, light);
-        let cloud = mix(cloud, SUN, 0.3 * facing.powi(16));
+        let sunlit_cloud = mix(cloud, SUN, 0.3 * facing.powi(16));
         let cover = density * smoothstep(0.0, 0.25, elevation);
-        mix(colour, cloud, cover)
+        (mix(colour, sunlit_cloud, cover), mix(clear, cloud, cover))
     }
 
     /// Cloud density (0..1) at a point of the cloud layer.
@@ -154,6 +172,18 @@ mod tests {
         let (high, low) = (mean_row(0), mean_row(31));
         assert!(high[2] > high[0], "sky top should be blue: {high:?}");
         assert!(low[0] > high[0], "horizon {low:?} should be paler than {high:?}");
+    }
+
+    #[test]
+    fn the_clear_sky_has_no_sun() {
+        let (with_sun, clear) = sky_boxes(2, 64, &SceneConfig::default());
+        assert_eq!(with_sun, sky_box(2, 64, &SceneConfig::default()));
+        // The front wall faces the sun (ahead and to the left at start): brighter with it.
+        let total = |image: &image::RgbaImage| image.pixels().map(|p| u64::from(p.0[0])).sum::<u64>();
+        assert!(total(&with_sun.sides[0]) > total(&clear.sides[0]) + 64 * 64 * 5);
+        // Away from the sun the two hardly differ.
+        let behind = total(&with_sun.sides[2]).abs_diff(total(&clear.sides[2]));
+        assert!(behind < 64 * 64 * 2, "{behind}");
     }
 
     #[test]

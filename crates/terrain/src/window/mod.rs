@@ -1,8 +1,11 @@
 //! The interactive window: a winit event loop feeding the fly camera and drawing with the same
-//! renderer as the off-screen path.
+//! renderer as the off-screen path, with the tuning panel ([`crate::panel`], egui) over it.
 //!
 //! The keys are in [`controls::BINDINGS`]; the mouse looks around while captured, the scroll
-//! wheel zooms.
+//! wheel zooms. While the panel is open the mouse is free for it, and Tab moves between its
+//! widgets.
+
+mod gui;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -20,8 +23,11 @@ use crate::config::SceneConfig;
 use crate::controls::{self, Action};
 use crate::headless::OffscreenTarget;
 use crate::output::{SaveError, save_image};
-use crate::render::{Backend, FrameView, Gpu, GpuError, RenderError, Renderer};
-use crate::world::{Heightfield, World};
+use crate::panel::{Panel, PanelRequests};
+use crate::render::{Backend, FrameView, Gpu, GpuError, GpuMemory, RenderError, Renderer};
+use crate::settings::{Settings, ViewSettings};
+use crate::world::World;
+use crate::world::heightfield::height_under;
 
 /// How to open the window.
 #[derive(Debug, Clone, PartialEq)]
@@ -42,6 +48,10 @@ pub struct WindowOptions {
     pub vsync: bool,
     /// Folder where screenshots are saved.
     pub screenshot_dir: PathBuf,
+    /// How the frames look, at start.
+    pub settings: Settings,
+    /// Where the panel saves (and loads) the settings.
+    pub settings_path: PathBuf,
 }
 
 /// Something the user should hear about while the window runs.
@@ -55,10 +65,21 @@ pub enum Notice {
     ScreenshotFailed(String),
     /// The mouse was captured for looking around (`true`) or released (`false`).
     MouseCaptured(bool),
+    /// What the renderer holds on the GPU, and its level-of-detail tree on the CPU (bytes).
+    GpuMemory {
+        /// GPU memory.
+        memory: GpuMemory,
+        /// CPU memory of the tree.
+        tree_bytes: usize,
+    },
+    /// The panel saved the settings to this file.
+    SettingsSaved(PathBuf),
+    /// The panel could not save or load the settings; why.
+    SettingsFailed(String),
 }
 
 /// How a window session went.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct WindowSummary {
     /// Frames drawn.
     pub frames: u64,
@@ -69,6 +90,8 @@ pub struct WindowSummary {
     /// Wall-clock time from the start of the first frame to the end of the last, in seconds
     /// (setting up the window and the GPU is not counted).
     pub seconds: f64,
+    /// The settings when the window closed (the panel may have changed them).
+    pub settings: Settings,
 }
 
 /// Why the window could not run.
@@ -123,10 +146,13 @@ pub fn run(
     })?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let camera = FlyCamera::new(options.pose, options.field_of_view_degrees, MotionSettings::default());
+    let settings = options.settings.clone();
     let mut app = App {
+        settings,
+        panel: Panel::default(),
+        panel_open: false,
         world,
         config,
-        ground: Heightfield::new(&world.heightmap, config),
         options,
         notice,
         camera,
@@ -154,6 +180,7 @@ pub fn run(
                 .first_frame
                 .zip(app.last_frame_end)
                 .map_or(0.0, |(first, last)| (last - first).as_secs_f64()),
+            settings: app.settings,
         }),
     }
 }
@@ -165,12 +192,16 @@ struct Running {
     surface_config: wgpu::SurfaceConfiguration,
     gpu: Gpu,
     renderer: Renderer,
+    gui: gui::Gui,
 }
 
 struct App<'a> {
+    /// The settings the panel edits (the renderer follows them).
+    settings: Settings,
+    panel: Panel,
+    panel_open: bool,
     world: &'a World,
     config: &'a SceneConfig,
-    ground: Heightfield,
     options: WindowOptions,
     notice: &'a mut dyn FnMut(Notice),
     camera: FlyCamera,
@@ -238,8 +269,10 @@ impl App<'_> {
             view_formats: if view_format == format { Vec::new() } else { vec![view_format] },
         };
         surface.configure(&gpu.device, &surface_config);
-        let renderer = Renderer::new(&gpu, self.world, self.config, view_format)?;
-        Ok(Running { window, surface, surface_config, gpu, renderer })
+        let renderer = Renderer::new(&gpu, self.world, self.config, &self.settings, view_format)?;
+        (self.notice)(Notice::GpuMemory { memory: renderer.gpu_memory(), tree_bytes: renderer.cpu_bytes() });
+        let gui = gui::Gui::new(&window, &gpu, view_format);
+        Ok(Running { window, surface, surface_config, gpu, renderer, gui })
     }
 
     /// Turns mouse look on (`captured`) or off. Grabbing and hiding the cursor is best effort:
@@ -278,7 +311,10 @@ impl App<'_> {
             // The others happen once per press.
             _ if !pressed || event.repeat => {}
             Action::Quit => event_loop.exit(),
+            // With the panel open the mouse is the panel's, and Tab moves between its widgets.
+            Action::ToggleMouse if self.panel_open => {}
             Action::ToggleMouse => self.set_mouse_captured(!self.mouse_captured),
+            Action::TogglePanel => self.toggle_panel(),
             Action::Screenshot => self.screenshot(),
             Action::FullScreen => {
                 if let Some(running) = &self.running {
@@ -286,6 +322,68 @@ impl App<'_> {
                     running.window.set_fullscreen((!full).then_some(Fullscreen::Borderless(None)));
                 }
             }
+        }
+    }
+
+    fn toggle_panel(&mut self) {
+        self.panel_open = !self.panel_open;
+        if self.panel_open {
+            self.capture_on_focus = false;
+            self.set_mouse_captured(false);
+        } else if let Some(running) = &mut self.running {
+            running.gui.clear();
+        }
+    }
+
+    /// Applies settings the panel changed, and its Save and Load.
+    fn follow_panel(&mut self, requests: PanelRequests) {
+        if requests.save {
+            let pose = self.camera.pose();
+            let view = self.view();
+            self.settings.view = Some(ViewSettings {
+                position: pose.position.to_array(),
+                yaw_degrees: pose.yaw_degrees,
+                pitch_degrees: pose.pitch_degrees,
+                field_of_view_degrees: view.field_of_view_degrees,
+                time_seconds: view.time_seconds,
+            });
+            match self.settings.save(&self.options.settings_path) {
+                Ok(()) => {
+                    self.panel.set_message(format!(
+                        "saved, with the camera ({})",
+                        self.options.settings_path.display()
+                    ));
+                    (self.notice)(Notice::SettingsSaved(self.options.settings_path.clone()));
+                }
+                Err(error) => {
+                    self.panel.set_message(error.to_string());
+                    (self.notice)(Notice::SettingsFailed(error.to_string()));
+                }
+            }
+        }
+        if requests.load {
+            match Settings::load(&self.options.settings_path) {
+                Ok(settings) => {
+                    if let Some(view) = &settings.view {
+                        let pose =
+                            CameraPose::new(view.position.into(), view.yaw_degrees, view.pitch_degrees);
+                        self.camera =
+                            FlyCamera::new(pose, view.field_of_view_degrees, MotionSettings::default());
+                    }
+                    self.settings = settings;
+                    self.panel.set_message("loaded".into());
+                }
+                Err(error) => {
+                    self.panel.set_message(error.to_string());
+                    (self.notice)(Notice::SettingsFailed(error.to_string()));
+                }
+            }
+        }
+        let Some(running) = &mut self.running else { return };
+        if running.renderer.settings() != &self.settings
+            && let Err(error) = running.renderer.apply(&running.gpu, self.world, &self.settings)
+        {
+            self.panel.set_message(error.to_string());
         }
     }
 
@@ -307,6 +405,8 @@ impl App<'_> {
             let target = OffscreenTarget::new(&running.gpu, running.renderer.target_format(), size.0, size.1)
                 .map_err(|error| error.to_string())?;
             running.renderer.draw(&running.gpu, target.view(), size, &view);
+            // What the window shows: the panel too, when it is open.
+            running.gui.paint(&running.gpu, target.view(), size);
             let image = target.read(&running.gpu).map_err(|error| error.to_string())?;
             let path = free_screenshot_path(&self.options.screenshot_dir, self.screenshots_taken);
             save_image(&image.into(), &path, image::ImageFormat::Png)
@@ -329,8 +429,10 @@ impl App<'_> {
         self.last_frame = Some(now);
         self.first_frame.get_or_insert(now);
         let limits = self.config.camera_limits();
-        let ground = &self.ground;
-        self.camera.update(step.as_secs_f32(), &limits, |x, z| ground.height_at(x, z));
+        // One query a frame, read from the heightmap itself: no full-resolution copy of the
+        // heights (268 MB at 8193 samples a side) is kept for it.
+        let (heightmap, config) = (&self.world.heightmap, self.config);
+        self.camera.update(step.as_secs_f32(), &limits, |x, z| height_under(heightmap, config, x, z));
         let view = self.view();
         let Some(running) = &mut self.running else {
             return;
@@ -358,6 +460,16 @@ impl App<'_> {
         });
         let size = (running.surface_config.width, running.surface_config.height);
         running.renderer.draw(&running.gpu, &target, size, &view);
+        let mut requests = PanelRequests::default();
+        if self.panel_open {
+            let (panel, settings) = (&mut self.panel, &mut self.settings);
+            let file = self.options.settings_path.as_path();
+            let wireframe = running.gpu.has_wireframe();
+            running
+                .gui
+                .run(&running.window, size, |ctx| requests = panel.show(ctx, settings, file, wireframe));
+            running.gui.paint(&running.gpu, &target, size);
+        }
         running.window.pre_present_notify();
         running.gpu.queue.present(frame);
         if let Err(error) = running.gpu.check() {
@@ -365,8 +477,13 @@ impl App<'_> {
             return;
         }
         self.frames += 1;
-        self.last_frame_end = Some(Instant::now());
+        let end = Instant::now();
+        if let Some(previous) = self.last_frame_end {
+            self.panel.record_frame((end - previous).as_secs_f32() * 1000.0);
+        }
+        self.last_frame_end = Some(end);
         self.update_title();
+        self.follow_panel(requests);
         if self.options.max_frames.is_some_and(|max| self.frames >= max) {
             event_loop.exit();
         }
@@ -415,6 +532,30 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        // The panel sees input first; what it uses (typing, clicks on it) is not for the scene.
+        if self.panel_open
+            && let Some(running) = &mut self.running
+        {
+            let used = running.gui.on_window_event(&running.window, &event);
+            let for_panel = match &event {
+                WindowEvent::KeyboardInput { event: key, .. } => {
+                    // F1 (the panel), F12 (a screenshot) and Esc are always the window's.
+                    use winit::keyboard::KeyCode;
+                    let ours = matches!(
+                        key.physical_key,
+                        PhysicalKey::Code(KeyCode::F1 | KeyCode::F12 | KeyCode::Escape)
+                    );
+                    !ours && (used || running.gui.wants_keyboard())
+                }
+                WindowEvent::MouseInput { .. } | WindowEvent::MouseWheel { .. } => {
+                    used || running.gui.wants_pointer()
+                }
+                _ => false,
+            };
+            if for_panel {
+                return;
+            }
+        }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
@@ -436,7 +577,7 @@ impl ApplicationHandler for App<'_> {
             WindowEvent::Focused(true) if self.capture_on_focus => self.set_mouse_captured(true),
             WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
             WindowEvent::MouseInput { state: ElementState::Pressed, button: MouseButton::Left, .. }
-                if !self.mouse_captured =>
+                if !self.mouse_captured && !self.panel_open =>
             {
                 self.set_mouse_captured(true)
             }

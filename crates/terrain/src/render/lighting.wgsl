@@ -1,0 +1,184 @@
+// The modern look's light, sky and fog, shared by its shaders (group 2, `lighting.rs`).
+// World convention: y-up, the water is the plane y = 0. Colours are stored values (no sRGB
+// decoding, as the course's textures are used); lighting is computed on their squares (a gamma
+// of 2) and encoded back with a square root.
+
+struct Scene {
+    // Toward the sun (unit), w: 1 when the land is lit (0: the colour map as it is).
+    sun_direction: vec4<f32>,
+    // The sun's colour times its intensity, w: 1 when the land casts shadows.
+    sun_colour: vec4<f32>,
+    // The sky dome's light (linear, times the ambient strength), w: unused.
+    sky_light: vec4<f32>,
+    // x: fog density at the water per unit, y: height falloff per unit, z: 1 when fog is on,
+    // w: seconds (wrapped) for the foam's drift.
+    fog: vec4<f32>,
+    // Deep water colour (stored values), w: depth in units at which the floor fades to half.
+    water_colour: vec4<f32>,
+    // The two wave normal maps' offsets, in tiles: xy and zw.
+    waves: vec4<f32>,
+    // x: 1 / world units a wave tile spans, y: wave strength, z: 1 when the sea floor shows,
+    // w: 1 when the sun glints.
+    wave_params: vec4<f32>,
+    // x: 1 when foam lines the shore, y: 1 when the land's reflection is drawn, z, w: the frame's
+    // size in pixels.
+    water_flags: vec4<f32>,
+    // World to the shadow map's clip space (orthographic, from the sun).
+    shadow_matrix: mat4x4<f32>,
+    // Half the sky box's width (x) and depth (z), its height (y), w: 1 / the shadow map's side.
+    sky_box: vec4<f32>,
+}
+
+@group(2) @binding(0) var<uniform> scene: Scene;
+@group(2) @binding(1) var sky_faces: texture_2d_array<f32>;
+@group(2) @binding(2) var sky_sampler: sampler;
+@group(2) @binding(3) var shadow_map: texture_depth_2d;
+@group(2) @binding(4) var shadow_sampler: sampler_comparison;
+
+// Stored value to linear (gamma 2) and back.
+fn to_linear(c: vec3<f32>) -> vec3<f32> {
+    return c * c;
+}
+
+fn to_stored(c: vec3<f32>) -> vec3<f32> {
+    return sqrt(max(c, vec3<f32>(0.0)));
+}
+
+// How much daylight there is: 1 with the sun well up, less as it sets.
+fn daylight() -> f32 {
+    return mix(0.28, 1.0, smoothstep(-0.1, 0.35, scene.sun_direction.y));
+}
+
+// The sky box's colour `stored` seen in `direction` (unit, from the eye), graded for the sun:
+// darker as it sets, warm toward it near the horizon, with its glow and disc.
+fn graded_sky(stored: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
+    let sun = scene.sun_direction.xyz;
+    let facing = max(dot(direction, sun), 0.0);
+    let sunset = 1.0 - smoothstep(0.0, 0.32, sun.y);
+    var colour = stored * daylight();
+    // Near the horizon, toward the sun, the sky takes the sun's colour as it sets.
+    let horizontal_sun = normalize(vec3<f32>(sun.x, 0.0, sun.z) + vec3<f32>(1e-5, 0.0, 0.0));
+    let horizontal = normalize(vec3<f32>(direction.x, 0.0, direction.z) + vec3<f32>(1e-5, 0.0, 0.0));
+    let toward = 0.5 + 0.5 * dot(horizontal, horizontal_sun);
+    let low = pow(1.0 - clamp(direction.y, 0.0, 1.0), 3.0);
+    let warmth = sunset * low * toward * toward;
+    let sun_colour = scene.sun_colour.rgb / max(max(scene.sun_colour.r, scene.sun_colour.g), max(scene.sun_colour.b, 1e-3));
+    colour = mix(colour, sun_colour * (0.55 + 0.45 * daylight()), 0.75 * warmth);
+    // The sun's glow and disc.
+    let glow = 0.25 * pow(facing, 8.0) + 0.5 * pow(facing, 64.0) + smoothstep(0.9993, 0.9997, facing);
+    colour = mix(colour, sun_colour, min(glow, 1.0) * step(-0.02, sun.y + 0.02));
+    return colour;
+}
+
+// The graded sky box seen from `origin` (inside the box) along `direction`: where the ray
+// leaves the box, the face it crosses and its texel there (faces laid out as `SkyFace::point`
+// lays them out). Rays going down see the walls' bottom rows.
+fn sky_along(origin: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
+    let half_size = scene.sky_box.xz;
+    let top = scene.sky_box.y;
+    let big = 1e9;
+    let to_x = select(big, (select(-half_size.x, half_size.x, direction.x > 0.0) - origin.x) / direction.x, abs(direction.x) > 1e-6);
+    let to_z = select(big, (select(-half_size.y, half_size.y, direction.z > 0.0) - origin.z) / direction.z, abs(direction.z) > 1e-6);
+    let to_top = select(big, (top - origin.y) / direction.y, direction.y > 1e-6);
+    let t = max(min(min(to_x, to_z), to_top), 0.0);
+    let exit = origin + direction * t;
+    var layer = 4;
+    var uv = vec2<f32>((exit.x + half_size.x) / (2.0 * half_size.x), (half_size.y - exit.z) / (2.0 * half_size.y));
+    if (to_top > min(to_x, to_z)) {
+        let v = 1.0 - max(exit.y, 0.0) / top;
+        if (to_z < to_x) {
+            if (direction.z < 0.0) {
+                layer = 0;
+                uv = vec2<f32>((exit.x + half_size.x) / (2.0 * half_size.x), v);
+            } else {
+                layer = 2;
+                uv = vec2<f32>((half_size.x - exit.x) / (2.0 * half_size.x), v);
+            }
+        } else {
+            if (direction.x > 0.0) {
+                layer = 1;
+                uv = vec2<f32>((exit.z + half_size.y) / (2.0 * half_size.y), v);
+            } else {
+                layer = 3;
+                uv = vec2<f32>((half_size.y - exit.z) / (2.0 * half_size.y), v);
+            }
+        }
+    }
+    let size = vec2<f32>(textureDimensions(sky_faces, 0));
+    let half_texel = vec2<f32>(0.5) / size;
+    let clamped = clamp(uv, half_texel, vec2<f32>(1.0) - half_texel);
+    let stored = textureSampleLevel(sky_faces, sky_sampler, clamped, layer, 0.0).rgb;
+    return graded_sky(stored, direction);
+}
+
+// The graded sky at the horizon in the direction from `eye` to `point` (seen horizontally, at
+// the foot of the sky box's walls): the colour the world fades into far away.
+fn horizon_colour(eye: vec3<f32>, point: vec3<f32>) -> vec3<f32> {
+    let ray = point.xz - eye.xz;
+    let length_xz = length(ray);
+    let d = select(vec2<f32>(0.0, -1.0), ray / max(length_xz, 1e-6), length_xz > 1e-6);
+    return sky_along(vec3<f32>(eye.x, 0.0, eye.z), vec3<f32>(d.x, 0.0, d.y));
+}
+
+// How much of the colour at `point` seen from `eye` the fog replaces (0 to 1): exponential
+// height fog integrated along the line of sight, and, whatever the fog, a fade into the horizon
+// as the point nears the sky box's walls (so the world meets the sky without a seam).
+// `path_length` is the distance light travels (longer than |point - eye| for a reflection).
+fn fog_amount(eye: vec3<f32>, point: vec3<f32>, path_length: f32) -> f32 {
+    var amount = 0.0;
+    if (scene.fog.z > 0.5) {
+        let a = scene.fog.x;
+        let b = max(scene.fog.y, 1e-4);
+        let y0 = max(eye.y, 0.0);
+        let y1 = max(point.y, 0.0);
+        let dy = y1 - y0;
+        // The integral of a exp(-b y) along the path, divided by its length.
+        var mean_density = a * exp(-b * y0);
+        if (abs(dy) > 1e-3) {
+            mean_density = a * (exp(-b * y0) - exp(-b * y1)) / (b * dy);
+        }
+        amount = 1.0 - exp(-mean_density * path_length);
+    }
+    // Where the walls are in this direction, and how far along the point is.
+    let half_size = scene.sky_box.xz;
+    let ray = point.xz - eye.xz;
+    let length_xz = length(ray);
+    if (length_xz > 1e-4) {
+        let d = ray / length_xz;
+        let to_x = select((-half_size.x - eye.x) / d.x, (half_size.x - eye.x) / d.x, d.x > 0.0);
+        let to_z = select((-half_size.y - eye.z) / d.y, (half_size.y - eye.z) / d.y, d.y > 0.0);
+        let reach = min(select(1e9, to_x, abs(d.x) > 1e-6), select(1e9, to_z, abs(d.y) > 1e-6));
+        amount = max(amount, smoothstep(0.45, 1.0, length_xz / max(reach, 1e-3)));
+    }
+    return clamp(amount, 0.0, 1.0);
+}
+
+// Fraction of the sun's light reaching `point` (0 in the land's shadow, 1 in the open), from
+// the shadow map with the hardware's bilinear comparison; `normal` offsets the lookup against
+// acne. (No early return before the sample: Mesa 22's lavapipe crashes on that.)
+fn sunlight(point: vec3<f32>, normal: vec3<f32>) -> f32 {
+    let clip = scene.shadow_matrix * vec4<f32>(point + normal * 0.02, 1.0);
+    let uv = vec2<f32>(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
+    let lit = textureSampleCompareLevel(shadow_map, shadow_sampler, clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)), clip.z - 0.0015);
+    let inside = all(uv >= vec2<f32>(0.0)) && all(uv <= vec2<f32>(1.0)) && clip.z <= 1.0;
+    return select(1.0, lit, inside && scene.sun_colour.w > 0.5);
+}
+
+// A surface of colour `albedo` (stored values) lit as the light map says (`light`: the sun's
+// light on it, with shadows, and how much of the sky it faces; see `bake.wgsl`); returns stored
+// values.
+fn lit_surface(albedo: vec3<f32>, light: vec2<f32>) -> vec3<f32> {
+    if (scene.sun_direction.w < 0.5) {
+        return albedo;
+    }
+    // Sky light from above, a little bounce from the ground below.
+    let sky = scene.sky_light.rgb * (0.6 + 0.4 * light.y);
+    return to_stored(to_linear(albedo) * (scene.sun_colour.rgb * light.x + sky));
+}
+
+// The aerial perspective of `point` seen from `eye`: the horizon's colour in its direction (rgb)
+// and how much of the point's own colour it replaces (a). It changes slowly across a surface, so
+// shaders compute it per vertex. `path_length` is the distance light travels.
+fn aerial(eye: vec3<f32>, point: vec3<f32>, path_length: f32) -> vec4<f32> {
+    return vec4<f32>(horizon_colour(eye, point), fog_amount(eye, point, path_length));
+}
