@@ -128,6 +128,32 @@ pub enum WriteError {
 /// when `gamma` is set; linear formats ignore it.
 pub fn write_image(image: &Image, path: &Path, gamma: bool) -> Result<(), WriteError> {
     let format = OutputFormat::from_path(path)?;
+    let mut encoded = Ok(());
+    let written = write_atomically(path, |out| {
+        let result = match format {
+            OutputFormat::Png => image.to_rgb8(gamma).write_to(out, ImageFormat::Png),
+            OutputFormat::Bmp => image.to_rgb8(gamma).write_to(out, ImageFormat::Bmp),
+            OutputFormat::Exr => image.to_rgb32f().write_to(out, ImageFormat::OpenExr),
+            OutputFormat::Hdr => image.to_rgb32f().write_to(out, ImageFormat::Hdr),
+        };
+        match result {
+            Ok(()) => out.flush(),
+            Err(image::ImageError::IoError(e)) => Err(e),
+            Err(source) => {
+                encoded = Err(WriteError::Encode { path: path.to_path_buf(), source });
+                Err(std::io::Error::other("encoding failed"))
+            }
+        }
+    });
+    encoded.and(written)
+}
+
+/// Writes a file whole or not at all: `write` fills a temporary file beside `path`, which is then
+/// renamed into place (and removed when `write` fails).
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> std::io::Result<()>,
+) -> Result<(), WriteError> {
     let io = |source| WriteError::Io { path: path.to_path_buf(), source };
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
@@ -142,13 +168,7 @@ pub fn write_image(image: &Image, path: &Path, gamma: bool) -> Result<(), WriteE
     let mut tmp = builder.tempfile_in(dir).map_err(io)?;
     {
         let mut out = BufWriter::new(tmp.as_file_mut());
-        let encoded = match format {
-            OutputFormat::Png => image.to_rgb8(gamma).write_to(&mut out, ImageFormat::Png),
-            OutputFormat::Bmp => image.to_rgb8(gamma).write_to(&mut out, ImageFormat::Bmp),
-            OutputFormat::Exr => image.to_rgb32f().write_to(&mut out, ImageFormat::OpenExr),
-            OutputFormat::Hdr => image.to_rgb32f().write_to(&mut out, ImageFormat::Hdr),
-        };
-        encoded.map_err(|source| WriteError::Encode { path: path.to_path_buf(), source })?;
+        write(&mut out).map_err(io)?;
         out.flush().map_err(io)?;
     }
     tmp.persist(path).map_err(|e| io(e.error))?;

@@ -18,6 +18,7 @@ pub mod image_io;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod parts;
 pub mod prepare;
 pub mod procedural;
 pub mod render;
