@@ -9,16 +9,20 @@
 //!   pixels are the very pixels of the whole render: every pixel's random numbers come from its
 //!   own coordinates, and the decisions that look at neighbours (adaptive anti-aliasing) see the
 //!   same neighbours, computed again at the tile's borders.
-//! - **Passes** (`--pass K/N`): `N` independent renders of the same image, each with its own random
-//!   streams (pass `K` of a path-traced render takes the samples `K * spp .. (K + 1) * spp` of
-//!   every pixel). A render with `--passes N` is exactly their merge: the pass images averaged,
-//!   weighted by their samples, in pass order ([`combine_passes`]).
+//! - **Passes** (`--pass K/N`): run `K` of a render of `N` independent runs
+//!   ([`crate::render::RenderSettings::runs`]): its own random streams, or for the path tracer
+//!   its own range of sample indices. A pass stores the exact sums of its estimates
+//!   ([`ExactSum`]), which do not depend on how they are grouped, so the merge of `N` passes is
+//!   the very render of `N` runs in one process.
 //!
 //! A part file is an OpenEXR file with one layer per block of rows, each placed in the full image
-//! by its data window (the display window is the full image), linear 32-bit float RGB, and
-//! attributes that say what it is: `rayterra.scene` (a digest of the scene and the files it
-//! reads), `rayterra.settings` (everything else that shapes the pixels), `rayterra.tile`,
-//! `rayterra.pass` and `rayterra.samples`. [`merge`] refuses parts that do not fit together.
+//! by its data window (the display window is the full image), linear 32-bit float RGB (for a pass,
+//! its own mean: the part can be looked at), for a pass the exact sums in twelve 32-bit integer
+//! channels (`sum.R.0` .. `sum.B.3`, each sum's 128 bits from the lowest word up), and attributes
+//! that say what it is: `rayterra.scene` (a digest of the scene and the files it reads),
+//! `rayterra.settings` (everything else that shapes the pixels), `rayterra.tile`, `rayterra.pass`
+//! and `rayterra.samples` (the estimates in each sum). [`merge`] refuses parts that do not fit
+//! together.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -33,6 +37,8 @@ use exr::prelude::{
 use sha2::{Digest, Sha256};
 
 use crate::image_io::{Image, WriteError, write_atomically};
+use crate::render::{PortionPixels, Rows};
+use crate::sampler::ExactSum;
 use crate::scene::MAX_IMAGE_SIDE;
 
 /// The most rows in one block of a tile (see the module documentation). Blocks of 8 rows keep
@@ -109,32 +115,58 @@ pub struct PartHeader {
     pub tile: Split,
     /// Which pass (the only one when not split into passes).
     pub pass: Split,
-    /// The samples behind each pixel of this pass: its weight when passes are averaged.
+    /// The estimates summed in each pixel of a pass (its samples, or its runs); for a part of
+    /// final values, the estimates behind them.
     pub samples: u64,
 }
 
-/// A part of a render: its header and the blocks of rows it holds, each with its pixels (linear
-/// RGB, top row first).
+/// A block of consecutive rows of a part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    /// The rows, of the full image.
+    pub rows: Range<u32>,
+    /// Their pixels, linear RGB, top row first: final values, or for a pass its own mean.
+    pub pixels: Vec<[f32; 3]>,
+    /// For a pass, the exact sums of its estimates, pixel by pixel.
+    pub sums: Option<Vec<ExactSum>>,
+}
+
+/// A part of a render: its header and the blocks of rows it holds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Part {
     /// What it is.
     pub header: PartHeader,
-    /// Blocks of rows of the full image and their pixels (`width * rows` each).
-    pub blocks: Vec<(Range<u32>, Vec<[f32; 3]>)>,
+    /// The tile's blocks of rows, top first.
+    pub blocks: Vec<Block>,
 }
 
 impl Part {
-    /// The part of `image` (a full-size render of one pass) that `header.tile` owns.
-    pub fn from_image(header: PartHeader, image: &Image) -> Result<Part, String> {
-        let w = image.width() as usize;
-        let blocks = tile_rows(header.height, header.tile)?
-            .into_iter()
-            .map(|rows| {
-                let pixels = image.pixels()[rows.start as usize * w..rows.end as usize * w].to_vec();
-                (rows, pixels)
+    /// The part made of what [`crate::render::render_portion`] computed for the rows of tile
+    /// `header.tile`.
+    pub fn from_portion(mut header: PartHeader, rows: &Rows, pixels: PortionPixels) -> Part {
+        let w = rows.width() as usize;
+        let (values, sums): (Vec<[f32; 3]>, Option<Vec<ExactSum>>) = match pixels {
+            PortionPixels::Final(values) => (values, None),
+            PortionPixels::Sums { sums, count } => {
+                header.samples = count;
+                (sums.iter().map(|s| s.mean(count).as_vec3().to_array()).collect(), Some(sums))
+            }
+        };
+        let mut start = 0;
+        let blocks = rows
+            .blocks()
+            .iter()
+            .map(|b| {
+                let range = start..start + b.len() * w;
+                start = range.end;
+                Block {
+                    rows: b.clone(),
+                    pixels: values[range.clone()].to_vec(),
+                    sums: sums.as_ref().map(|s| s[range].to_vec()),
+                }
             })
             .collect();
-        Ok(Part { header, blocks })
+        Part { header, blocks }
     }
 }
 
@@ -186,10 +218,20 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), WriteError> {
     let layers: Vec<Layer<AnyChannels<FlatSamples>>> = part
         .blocks
         .iter()
-        .map(|(rows, pixels)| {
+        .map(|Block { rows, pixels, sums }| {
             let channel = |name: &str, c: usize| {
                 AnyChannel::new(name, FlatSamples::F32(pixels.iter().map(|p| p[c]).collect()))
             };
+            let mut channels: smallvec::SmallVec<[AnyChannel<FlatSamples>; 4]> =
+                smallvec::smallvec![channel("R", 0), channel("G", 1), channel("B", 2)];
+            if let Some(sums) = sums {
+                for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                    for word in 0..4 {
+                        let values = sums.iter().map(|s| (s.fixed[c] as u128 >> (32 * word)) as u32).collect();
+                        channels.push(AnyChannel::new(format!("sum.{name}.{word}").as_str(), FlatSamples::U32(values)));
+                    }
+                }
+            }
             let mut layer = LayerAttributes::named(text(&format!("rows {}..{}", rows.start, rows.end)))
                 .with_position(Vec2(0, rows.start as i32));
             layer.software_name = Some(text(concat!("rayterra ", env!("CARGO_PKG_VERSION"))));
@@ -197,7 +239,7 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), WriteError> {
                 (h.width as usize, rows.len()),
                 layer,
                 Encoding::FAST_LOSSLESS,
-                AnyChannels::sort(smallvec::smallvec![channel("R", 0), channel("G", 1), channel("B", 2)]),
+                AnyChannels::sort(channels),
             )
         })
         .collect();
@@ -296,44 +338,36 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
         .all_attributes()
         .from_file(path)
         .map_err(|e| PartError::Read { path: path.to_path_buf(), reason: e.to_string() })?;
+    let is_pass = header.pass.count > 1;
     let mut blocks = Vec::with_capacity(image.layer_data.len());
     for (layer, rows) in image.layer_data.iter().zip(expected) {
-        let channel = |name: &str| {
-            layer
-                .channel_data
-                .list
-                .iter()
-                .find(|c| c.name == Text::from(name))
-                .and_then(|c| match &c.sample_data {
-                    FlatSamples::F32(v) => Some(v),
-                    _ => None,
-                })
-                .ok_or_else(|| not_a_part(format!("a block has no 32-bit float `{name}` channel")))
+        let find = |name: &str| layer.channel_data.list.iter().find(|c| c.name == Text::from(name));
+        let float = |name: &str| match find(name).map(|c| &c.sample_data) {
+            Some(FlatSamples::F32(v)) => Ok(v),
+            _ => Err(not_a_part(format!("a block has no 32-bit float `{name}` channel"))),
         };
-        let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
-        let pixels = r.iter().zip(g).zip(b).map(|((&r, &g), &b)| [r, g, b]).collect();
-        blocks.push((rows, pixels));
-    }
-    Ok(Part { header, blocks })
-}
-
-/// The pass images averaged, weighted by their samples, in the order given: `sum w_k c_k / sum
-/// w_k` per channel, summed in `f64` and rounded to `f32` once. A render with `--passes N` and the
-/// merge of its `N` passes both come through here, which makes them the same bytes.
-pub fn combine_passes(passes: &[(u64, &[[f32; 3]])]) -> Vec<[f32; 3]> {
-    let len = passes.first().map_or(0, |p| p.1.len());
-    let total: f64 = passes.iter().map(|p| p.0 as f64).sum();
-    (0..len)
-        .map(|i| {
-            let mut sum = [0f64; 3];
-            for (weight, pixels) in passes {
-                for c in 0..3 {
-                    sum[c] += *weight as f64 * pixels[i][c] as f64;
+        let (r, g, b) = (float("R")?, float("G")?, float("B")?);
+        let pixels: Vec<[f32; 3]> = r.iter().zip(g).zip(b).map(|((&r, &g), &b)| [r, g, b]).collect();
+        let sums = if is_pass {
+            let mut sums = vec![ExactSum::default(); pixels.len()];
+            for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                for word in 0..4 {
+                    let name = format!("sum.{name}.{word}");
+                    let Some(FlatSamples::U32(values)) = find(&name).map(|c| &c.sample_data) else {
+                        return Err(not_a_part(format!("a block of a pass has no 32-bit integer `{name}` channel")));
+                    };
+                    for (sum, &v) in sums.iter_mut().zip(values) {
+                        sum.fixed[c] = (sum.fixed[c] as u128 | (v as u128) << (32 * word)) as i128;
+                    }
                 }
             }
-            sum.map(|s| (s / total) as f32)
-        })
-        .collect()
+            Some(sums)
+        } else {
+            None
+        };
+        blocks.push(Block { rows, pixels, sums });
+    }
+    Ok(Part { header, blocks })
 }
 
 /// Assembles part files into the full image: every tile of every pass must be there once, and all
@@ -396,11 +430,22 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Image, PartError> {
         parts.iter().map(|(_, p)| ((p.header.tile.index, p.header.pass.index), p)).collect();
     for tile in 0..f.tile.count {
         let passes: Vec<&Part> = (0..f.pass.count).map(|p| by_key[&(tile, p)]).collect();
-        for (b, (rows, _)) in passes[0].blocks.iter().enumerate() {
-            let images: Vec<(u64, &[[f32; 3]])> =
-                passes.iter().map(|p| (p.header.samples, p.blocks[b].1.as_slice())).collect();
-            let combined = combine_passes(&images);
-            pixels[rows.start as usize * w..rows.end as usize * w].copy_from_slice(&combined);
+        for (b, block) in passes[0].blocks.iter().enumerate() {
+            let out = &mut pixels[block.rows.start as usize * w..block.rows.end as usize * w];
+            if f.pass.count == 1 {
+                out.copy_from_slice(&block.pixels);
+                continue;
+            }
+            // Passes: their exact sums added, divided by all their estimates.
+            let count: u64 = passes.iter().map(|p| p.header.samples).sum();
+            let mut total = vec![ExactSum::default(); out.len()];
+            for p in &passes {
+                let sums = p.blocks[b].sums.as_ref().expect("a pass part holds sums");
+                total.iter_mut().zip(sums).for_each(|(t, s)| t.merge(s));
+            }
+            for (o, t) in out.iter_mut().zip(&total) {
+                *o = t.mean(count).as_vec3().to_array();
+            }
         }
     }
     Ok(Image::new(f.width, f.height, pixels))
@@ -417,6 +462,8 @@ fn describe(tile: Split, pass: Split) -> String {
 
 #[cfg(test)]
 mod tests {
+    use glam::DVec3;
+
     use super::*;
 
     #[test]
@@ -465,30 +512,58 @@ mod tests {
         }
     }
 
-    fn image(seed: f32) -> Image {
-        Image::new(3, 20, (0..60).map(|i| [i as f32 * seed, -1.5 * seed, 1e6 + seed]).collect())
+    /// Pixel values of the rows of `tile` of a 3 x 20 image, varied by `seed`.
+    fn values(rows: &Rows, seed: f64) -> Vec<DVec3> {
+        rows.ys()
+            .flat_map(|y| (0..3).map(move |x| DVec3::new((y * 3 + x) as f64 * seed, -1.5 * seed, 1e6 + seed / 3.0)))
+            .collect()
+    }
+
+    fn sums_of(values: &[DVec3]) -> Vec<ExactSum> {
+        values
+            .iter()
+            .map(|&v| {
+                let mut s = ExactSum::default();
+                s.add(v);
+                s.add(v * 0.5);
+                s
+            })
+            .collect()
     }
 
     #[test]
     fn parts_round_trip_through_their_files() {
         let dir = tempfile::tempdir().expect("temp dir");
-        let part = Part::from_image(header(Split { index: 1, count: 2 }, Split::WHOLE), &image(0.25)).expect("part");
-        let path = dir.path().join("part.exr");
-        write_part(&part, &path).expect("written");
-        assert_eq!(read_part(&path).expect("read"), part);
-        // Another reader sees an ordinary EXR file.
-        assert!(image::open(&path).is_ok());
+        let tile = Split { index: 1, count: 2 };
+        let rows = Rows::tile(3, 20, tile).expect("tile");
+        let finals = values(&rows, 0.25).iter().map(|c| c.as_vec3().to_array()).collect();
+        let sums = PortionPixels::Sums { sums: sums_of(&values(&rows, 0.25)), count: 2 };
+        for (pass, pixels) in [(Split::WHOLE, PortionPixels::Final(finals)), (Split { index: 0, count: 3 }, sums)] {
+            let part = Part::from_portion(header(tile, pass), &rows, pixels);
+            let path = dir.path().join("part.exr");
+            write_part(&part, &path).expect("written");
+            assert_eq!(read_part(&path).expect("read"), part);
+            // Another reader sees an ordinary EXR file.
+            assert!(image::open(&path).is_ok());
+        }
     }
 
     #[test]
     fn tiles_and_passes_merge_into_the_whole() {
-        let passes = [image(1.0), image(3.0)];
-        let whole = combine_passes(&[(4, passes[0].pixels()), (4, passes[1].pixels())]);
+        // Two passes of a 3 x 20 image, each the sums of two estimates.
+        let full = Rows::full(3, 20);
+        let pass_sums: Vec<Vec<ExactSum>> = [1.0, 3.0].iter().map(|&seed| sums_of(&values(&full, seed))).collect();
+        let mut whole = pass_sums[0].clone();
+        whole.iter_mut().zip(&pass_sums[1]).for_each(|(a, b)| a.merge(b));
+        let whole: Vec<[f32; 3]> = whole.iter().map(|s| s.mean(4).as_vec3().to_array()).collect();
         let mut parts = Vec::new();
         for t in 0..3 {
-            for (p, img) in passes.iter().enumerate() {
-                let h = header(Split { index: t, count: 3 }, Split { index: p as u32, count: 2 });
-                parts.push((PathBuf::from(format!("t{t}p{p}.exr")), Part::from_image(h, img).expect("part")));
+            let tile = Split { index: t, count: 3 };
+            let rows = Rows::tile(3, 20, tile).expect("tile");
+            for (p, seed) in [1.0, 3.0].iter().enumerate() {
+                let pixels = PortionPixels::Sums { sums: sums_of(&values(&rows, *seed)), count: 2 };
+                let h = header(tile, Split { index: p as u32, count: 2 });
+                parts.push((PathBuf::from(format!("t{t}p{p}.exr")), Part::from_portion(h, &rows, pixels)));
             }
         }
         parts.reverse();
@@ -498,10 +573,10 @@ mod tests {
     #[test]
     fn merge_refuses_parts_that_do_not_fit() {
         let tile = |t: u32| {
-            (
-                PathBuf::from(format!("part-{t}.exr")),
-                Part::from_image(header(Split { index: t, count: 3 }, Split::WHOLE), &image(1.0)).expect("part"),
-            )
+            let split = Split { index: t, count: 3 };
+            let rows = Rows::tile(3, 20, split).expect("tile");
+            let pixels = PortionPixels::Final(vec![[0.5; 3]; rows.len()]);
+            (PathBuf::from(format!("part-{t}.exr")), Part::from_portion(header(split, Split::WHOLE), &rows, pixels))
         };
         let err = merge(&[tile(0), tile(2)]).expect_err("missing").to_string();
         assert!(err.contains("1 of 3 parts are missing: tile 1/3"), "{err}");
@@ -517,7 +592,8 @@ mod tests {
     fn other_images_are_not_parts() {
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("plain.exr");
-        crate::image_io::write_image(&image(1.0), &path, false).expect("written");
+        let plain = Image::new(3, 20, vec![[0.5; 3]; 60]);
+        crate::image_io::write_image(&plain, &path, false).expect("written");
         let err = read_part(&path).expect_err("plain EXR").to_string();
         assert!(err.contains("is not a rayterra part file"), "{err}");
         std::fs::write(&path, b"not an image").expect("written");

@@ -32,7 +32,7 @@
 //! whatever the count; the statistics of a pass sum over its batches. Everything is
 //! deterministic: pixels and photons draw from their own streams, photons are stored in index
 //! order, and every pixel sums its photons in the map's fixed order, so the image does not depend
-//! on the thread count, and any rectangle of pixels renders to the same values on its own.
+//! on the thread count, and any set of rows renders to the same values on its own.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -46,7 +46,7 @@ use crate::integrator::lights::Lights;
 use crate::integrator::path::{Vertex, walk};
 use crate::integrator::photon_map::{MapEntry, PhotonMap};
 use crate::prepare::PreparedScene;
-use crate::render::PixelRect;
+use crate::render::Rows;
 use crate::sampler::{PixelRng, stream};
 use crate::scene::{Diagnostic, PhotonSettings, Severity};
 
@@ -186,6 +186,20 @@ pub struct SppmStats {
     pub mean_radius: f64,
 }
 
+impl SppmStats {
+    /// The statistics of two runs together (the mean radius is their mean).
+    pub fn add(&self, other: &SppmStats) -> SppmStats {
+        SppmStats {
+            passes: self.passes + other.passes,
+            photons: self.photons + other.photons,
+            stored: self.stored + other.stored,
+            rays: self.rays + other.rays,
+            photon_seconds: self.photon_seconds + other.photon_seconds,
+            mean_radius: (self.mean_radius + other.mean_radius) / 2.0,
+        }
+    }
+}
+
 /// The state of one pixel across passes.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelState {
@@ -218,19 +232,20 @@ struct VisiblePoint {
     m: u64,
 }
 
-/// Renders the pixels `rect` (row-major result) of an image `image_width` pixels wide, seen
-/// through `camera`, with SPPM. `progress(passes)` is called after each pass.
+/// Renders the pixels of `rows` (in the order of [`Rows::ys`]), seen through `camera`, with SPPM.
+/// `progress(passes)` is called after each pass.
 pub fn render(
     scene: &PreparedScene,
     camera: &Camera,
     settings: &SppmSettings,
-    image_width: u32,
-    rect: PixelRect,
+    rows: &Rows,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<DVec3>, SppmStats) {
     let lights = Lights::new(scene);
-    let w = rect.x1.saturating_sub(rect.x0) as usize;
-    let pixels = rect.len();
+    let image_width = rows.width();
+    let w = image_width as usize;
+    let ys: Vec<u32> = rows.ys().collect();
+    let pixels = rows.len();
     if pixels == 0 {
         return (Vec::new(), SppmStats::default());
     }
@@ -245,10 +260,10 @@ pub fn render(
         // 1. Camera pass.
         points.par_chunks_mut(w).zip(states.par_chunks_mut(w)).enumerate().for_each(
             |(row, (points, states))| {
-                let y = rect.y0 + row as u32;
+                let y = ys[row];
                 let mut row_rays = 0;
                 for (i, (vp, state)) in points.iter_mut().zip(states.iter_mut()).enumerate() {
-                    let x = rect.x0 + i as u32;
+                    let x = i as u32;
                     let mut rng = PixelRng::for_sample(settings.seed, stream::SPPM_CAMERA, x, y, pass);
                     let (dx, dy) = (rng.uniform(), rng.uniform());
                     let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
