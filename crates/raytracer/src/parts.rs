@@ -3,9 +3,9 @@
 //! bytes as a render in one process.
 //!
 //! Two ways to split, which combine:
-//! - **Tiles** (`--tile K/N`): the image's rows are cut into blocks of at most
-//!   [`TILE_BLOCK_ROWS`] rows, dealt to the `N` tiles in turn (block `b` to tile `b mod N`), so that
-//!   every tile gets a share of every part of the picture (costly and cheap rows alike). A tile's
+//! - **Tiles** (`--tile K/N`): the image's rows are cut into blocks ([`tile_block_rows`] rows
+//!   each), dealt to the `N` tiles in turn (block `b` to tile `b mod N`), so that every tile gets
+//!   a share of every part of the picture (costly and cheap rows alike). A tile's
 //!   pixels are the very pixels of the whole render: every pixel's random numbers come from its
 //!   own coordinates, and the decisions that look at neighbours (adaptive anti-aliasing) see the
 //!   same neighbours, computed again at the tile's borders.
@@ -41,10 +41,22 @@ use crate::render::{PortionPixels, Rows};
 use crate::sampler::ExactSum;
 use crate::scene::MAX_IMAGE_SIDE;
 
-/// The most rows in one block of a tile (see the module documentation). Blocks of 8 rows keep
-/// the tiles of the measured scenes within a few percent of equal work while the rows computed
-/// again at block borders for adaptive anti-aliasing cost little.
-pub const TILE_BLOCK_ROWS: u32 = 8;
+/// The most rows in one block of a tile.
+pub const MAX_TILE_BLOCK_ROWS: u32 = 16;
+/// The fewest blocks a tile gets when the image is high enough.
+pub const BLOCKS_PER_TILE: u32 = 6;
+
+/// The rows in each block of an image `height` rows high cut into `tiles` tiles: as many as make
+/// [`BLOCKS_PER_TILE`] blocks a tile, from 1 to [`MAX_TILE_BLOCK_ROWS`].
+///
+/// Chosen by measurement (`cargo bench -p raytracer --bench tiles`, rays traced by each tile of
+/// four scenes): smaller blocks share the work more evenly, but with adaptive anti-aliasing each
+/// block traces the rows above and below it again (its first pass compares every pixel with its
+/// neighbours), and the first pass is most of a render's rays. About six blocks a tile is where
+/// the largest tile's work is least for 4 to 16 tiles.
+pub fn tile_block_rows(height: u32, tiles: u32) -> u32 {
+    (height / (BLOCKS_PER_TILE * tiles.max(1))).clamp(1, MAX_TILE_BLOCK_ROWS)
+}
 
 /// Part `index` of `count` (`K/N` on the command line, `K` from 0).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -85,14 +97,18 @@ impl fmt::Display for Split {
     }
 }
 
-/// The blocks of rows tile `tile` of an image `height` rows high owns, top first. Blocks are
-/// [`TILE_BLOCK_ROWS`] high, or smaller when there are fewer than that many rows a tile, so that
-/// every tile gets at least one row; a tile count above the height is refused.
+/// The blocks of rows tile `tile` of an image `height` rows high owns, top first, in blocks of
+/// [`tile_block_rows`] rows. A tile count above the height is refused.
 pub fn tile_rows(height: u32, tile: Split) -> Result<Vec<Range<u32>>, String> {
+    tile_rows_in_blocks(height, tile, tile_block_rows(height, tile.count))
+}
+
+/// [`tile_rows`] with blocks of `block_rows` rows (fewer when a tile would get no row).
+pub fn tile_rows_in_blocks(height: u32, tile: Split, block_rows: u32) -> Result<Vec<Range<u32>>, String> {
     if tile.count > height {
         return Err(format!("an image {height} rows high can be cut into at most {height} tiles, not {}", tile.count));
     }
-    let block = (height / tile.count).clamp(1, TILE_BLOCK_ROWS);
+    let block = (height / tile.count).clamp(1, block_rows.max(1));
     let blocks = height.div_ceil(block);
     Ok((tile.index..blocks)
         .step_by(tile.count as usize)
@@ -488,7 +504,7 @@ mod tests {
                     let rows = tile_rows(height, Split { index, count }).expect("tiles");
                     assert!(!rows.is_empty(), "tile {index}/{count} of {height} rows is empty");
                     for r in rows {
-                        assert!(r.len() as u32 <= TILE_BLOCK_ROWS);
+                        assert!(r.len() as u32 <= MAX_TILE_BLOCK_ROWS);
                         for y in r {
                             seen[y as usize] += 1;
                         }
