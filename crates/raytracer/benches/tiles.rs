@@ -47,31 +47,47 @@ fn main() {
         "{:<30} {:>5} {:>6} {:>16} {:>16} {:>16}",
         "scene", "tiles", "block", "largest / mean", "all / whole", "product"
     );
-    println!("{:<30} {:>5} {:>6} {:>8} {:>7} {:>8} {:>7} {:>8} {:>7}", "", "", "rows", "rays", "time", "rays", "time", "rays", "time");
+    println!(
+        "{:<30} {:>5} {:>6} {:>8} {:>7} {:>8} {:>7} {:>8} {:>7}",
+        "", "", "rows", "rays", "time", "rays", "time", "rays", "time"
+    );
     for (name, path, w, h) in scenes {
         let Some(scene) = load(&path) else {
             eprintln!("cannot load {}", path.display());
             continue;
         };
-        let settings = RenderSettings { width: w, height: h, threads: Some(1), photons: Some(500_000), ..RenderSettings::for_scene(&scene) };
+        let settings = RenderSettings {
+            width: w,
+            height: h,
+            threads: Some(1),
+            photons: Some(500_000),
+            ..RenderSettings::for_scene(&scene)
+        };
         let (whole_rays, whole_time) = cost(&scene, &settings, &Rows::full(w, h));
         for tiles in [4, 8, 16] {
+            // The block height tile_rows chooses, marked with a star, among others.
             let chosen = raytracer::parts::tile_block_rows(h, tiles);
-            for block in [4, 8, 16, 32] {
-                let block = if block == 4 && ![4, 8, 16, 32].contains(&chosen) { chosen } else { block };
+            let mut blocks = vec![4, 8, 16, 32, chosen];
+            blocks.sort_unstable();
+            blocks.dedup();
+            for block in blocks {
                 let mut rays = Vec::new();
                 let mut times = Vec::new();
                 for k in 0..tiles {
-                    let blocks = tile_rows_in_blocks(h, Split { index: k, count: tiles }, block).expect("tiles");
+                    let blocks =
+                        tile_rows_in_blocks(h, Split { index: k, count: tiles }, block).expect("tiles");
                     let (r, t) = cost(&scene, &settings, &Rows::from_blocks(w, blocks));
                     rays.push(r as f64);
                     times.push(t);
                 }
-                let ratio = |v: &[f64]| v.iter().cloned().fold(0.0, f64::max) / (v.iter().sum::<f64>() / v.len() as f64);
+                let ratio = |v: &[f64]| {
+                    v.iter().cloned().fold(0.0, f64::max) / (v.iter().sum::<f64>() / v.len() as f64)
+                };
                 let (rays_all, times_all) =
                     (rays.iter().sum::<f64>() / whole_rays as f64, times.iter().sum::<f64>() / whole_time);
                 println!(
-                    "{name:<30} {tiles:>5} {block:>6} {:>8.2} {:>7.2} {:>8.3} {:>7.3} {:>8.2} {:>7.2}",
+                    "{name:<30} {tiles:>5} {:>6} {:>8.2} {:>7.2} {:>8.3} {:>7.3} {:>8.2} {:>7.2}",
+                    format!("{}{block}", if block == chosen { "*" } else { "" }),
                     ratio(&rays),
                     ratio(&times),
                     rays_all,

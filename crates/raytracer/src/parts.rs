@@ -78,7 +78,8 @@ impl Split {
 
     /// Parses `K/N`.
     pub fn parse(text: &str) -> Result<Split, String> {
-        let (k, n) = text.split_once('/').ok_or_else(|| format!("expected K/N (such as 3/8), not `{text}`"))?;
+        let (k, n) =
+            text.split_once('/').ok_or_else(|| format!("expected K/N (such as 3/8), not `{text}`"))?;
         let parse = |s: &str, what: &str| {
             s.trim().parse::<u32>().map_err(|_| format!("`{s}` in `{text}` is not a valid {what}"))
         };
@@ -106,7 +107,10 @@ pub fn tile_rows(height: u32, tile: Split) -> Result<Vec<Range<u32>>, String> {
 /// [`tile_rows`] with blocks of `block_rows` rows (fewer when a tile would get no row).
 pub fn tile_rows_in_blocks(height: u32, tile: Split, block_rows: u32) -> Result<Vec<Range<u32>>, String> {
     if tile.count > height {
-        return Err(format!("an image {height} rows high can be cut into at most {height} tiles, not {}", tile.count));
+        return Err(format!(
+            "an image {height} rows high can be cut into at most {height} tiles, not {}",
+            tile.count
+        ));
     }
     let block = (height / tile.count).clamp(1, block_rows.max(1));
     let blocks = height.div_ceil(block);
@@ -221,7 +225,8 @@ const ATTR_SAMPLES: &str = "rayterra.samples";
 /// Writes `part` to `path` as an OpenEXR part file, whole or not at all.
 pub fn write_part(part: &Part, path: &Path) -> Result<(), WriteError> {
     let h = &part.header;
-    let mut attributes = ImageAttributes::new(IntegerBounds::new((0, 0), (h.width as usize, h.height as usize)));
+    let mut attributes =
+        ImageAttributes::new(IntegerBounds::new((0, 0), (h.width as usize, h.height as usize)));
     for (name, value) in [
         (ATTR_SCENE, h.scene.clone()),
         (ATTR_SETTINGS, h.settings.clone()),
@@ -243,8 +248,12 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), WriteError> {
             if let Some(sums) = sums {
                 for (c, name) in ["R", "G", "B"].iter().enumerate() {
                     for word in 0..4 {
-                        let values = sums.iter().map(|s| (s.fixed[c] as u128 >> (32 * word)) as u32).collect();
-                        channels.push(AnyChannel::new(format!("sum.{name}.{word}").as_str(), FlatSamples::U32(values)));
+                        let values =
+                            sums.iter().map(|s| (s.fixed[c] as u128 >> (32 * word)) as u32).collect();
+                        channels.push(AnyChannel::new(
+                            format!("sum.{name}.{word}").as_str(),
+                            FlatSamples::U32(values),
+                        ));
                     }
                 }
             }
@@ -268,7 +277,8 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), WriteError> {
 
 /// The text of an attribute, with anything but printable ASCII replaced (EXR text is bytes).
 fn text(value: &str) -> Text {
-    let ascii: String = value.chars().map(|c| if c.is_ascii_graphic() || c == ' ' { c } else { '?' }).collect();
+    let ascii: String =
+        value.chars().map(|c| if c.is_ascii_graphic() || c == ' ' { c } else { '?' }).collect();
     Text::from(ascii.as_str())
 }
 
@@ -320,7 +330,9 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
         || !(1..=MAX_IMAGE_SIDE as usize).contains(&width)
         || !(1..=MAX_IMAGE_SIDE as usize).contains(&height)
     {
-        return Err(not_a_part(format!("its display window ({width}x{height}) is not an image rayterra renders")));
+        return Err(not_a_part(format!(
+            "its display window ({width}x{height}) is not an image rayterra renders"
+        )));
     }
     let split = |name: &str| Split::parse(&attr(name)?).map_err(|e| not_a_part(format!("`{name}`: {e}")));
     let header = PartHeader {
@@ -330,7 +342,9 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
         settings: attr(ATTR_SETTINGS)?,
         tile: split(ATTR_TILE)?,
         pass: split(ATTR_PASS)?,
-        samples: attr(ATTR_SAMPLES)?.parse().map_err(|_| not_a_part(format!("`{ATTR_SAMPLES}` is not a count")))?,
+        samples: attr(ATTR_SAMPLES)?
+            .parse()
+            .map_err(|_| not_a_part(format!("`{ATTR_SAMPLES}` is not a count")))?,
     };
     let expected = tile_rows(header.height, header.tile).map_err(not_a_part)?;
     let layout: Vec<Range<u32>> = meta
@@ -341,7 +355,8 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
             start..start + h.layer_size.1 as u32
         })
         .collect();
-    let full_width = meta.headers.iter().all(|h| h.own_attributes.layer_position.0 == 0 && h.layer_size.0 == width);
+    let full_width =
+        meta.headers.iter().all(|h| h.own_attributes.layer_position.0 == 0 && h.layer_size.0 == width);
     if layout != expected || !full_width {
         return Err(not_a_part(format!("its blocks of rows are not those of tile {}", header.tile)));
     }
@@ -370,7 +385,9 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
                 for word in 0..4 {
                     let name = format!("sum.{name}.{word}");
                     let Some(FlatSamples::U32(values)) = find(&name).map(|c| &c.sample_data) else {
-                        return Err(not_a_part(format!("a block of a pass has no 32-bit integer `{name}` channel")));
+                        return Err(not_a_part(format!(
+                            "a block of a pass has no 32-bit integer `{name}` channel"
+                        )));
                     };
                     for (sum, &v) in sums.iter_mut().zip(values) {
                         sum.fixed[c] = (sum.fixed[c] as u128 | (v as u128) << (32 * word)) as i128;
@@ -428,11 +445,14 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Image, PartError> {
     let missing: Vec<String> = (0..f.tile.count)
         .flat_map(|t| (0..f.pass.count).map(move |p| (t, p)))
         .filter(|key| !grid.contains_key(key))
-        .map(|(t, p)| describe(Split { index: t, count: f.tile.count }, Split { index: p, count: f.pass.count }))
+        .map(|(t, p)| {
+            describe(Split { index: t, count: f.tile.count }, Split { index: p, count: f.pass.count })
+        })
         .collect();
     if !missing.is_empty() {
         let shown = missing.iter().take(20).cloned().collect::<Vec<_>>().join(", ");
-        let more = if missing.len() > 20 { format!(" and {} more", missing.len() - 20) } else { String::new() };
+        let more =
+            if missing.len() > 20 { format!(" and {} more", missing.len() - 20) } else { String::new() };
         return Err(PartError::Mismatch(format!(
             "{} of {} parts are missing: {shown}{more}",
             missing.len(),
@@ -531,7 +551,9 @@ mod tests {
     /// Pixel values of the rows of `tile` of a 3 x 20 image, varied by `seed`.
     fn values(rows: &Rows, seed: f64) -> Vec<DVec3> {
         rows.ys()
-            .flat_map(|y| (0..3).map(move |x| DVec3::new((y * 3 + x) as f64 * seed, -1.5 * seed, 1e6 + seed / 3.0)))
+            .flat_map(|y| {
+                (0..3).map(move |x| DVec3::new((y * 3 + x) as f64 * seed, -1.5 * seed, 1e6 + seed / 3.0))
+            })
             .collect()
     }
 
@@ -554,7 +576,9 @@ mod tests {
         let rows = Rows::tile(3, 20, tile).expect("tile");
         let finals = values(&rows, 0.25).iter().map(|c| c.as_vec3().to_array()).collect();
         let sums = PortionPixels::Sums { sums: sums_of(&values(&rows, 0.25)), count: 2 };
-        for (pass, pixels) in [(Split::WHOLE, PortionPixels::Final(finals)), (Split { index: 0, count: 3 }, sums)] {
+        for (pass, pixels) in
+            [(Split::WHOLE, PortionPixels::Final(finals)), (Split { index: 0, count: 3 }, sums)]
+        {
             let part = Part::from_portion(header(tile, pass), &rows, pixels);
             let path = dir.path().join("part.exr");
             write_part(&part, &path).expect("written");
@@ -568,7 +592,8 @@ mod tests {
     fn tiles_and_passes_merge_into_the_whole() {
         // Two passes of a 3 x 20 image, each the sums of two estimates.
         let full = Rows::full(3, 20);
-        let pass_sums: Vec<Vec<ExactSum>> = [1.0, 3.0].iter().map(|&seed| sums_of(&values(&full, seed))).collect();
+        let pass_sums: Vec<Vec<ExactSum>> =
+            [1.0, 3.0].iter().map(|&seed| sums_of(&values(&full, seed))).collect();
         let mut whole = pass_sums[0].clone();
         whole.iter_mut().zip(&pass_sums[1]).for_each(|(a, b)| a.merge(b));
         let whole: Vec<[f32; 3]> = whole.iter().map(|s| s.mean(4).as_vec3().to_array()).collect();
@@ -592,7 +617,10 @@ mod tests {
             let split = Split { index: t, count: 3 };
             let rows = Rows::tile(3, 20, split).expect("tile");
             let pixels = PortionPixels::Final(vec![[0.5; 3]; rows.len()]);
-            (PathBuf::from(format!("part-{t}.exr")), Part::from_portion(header(split, Split::WHOLE), &rows, pixels))
+            (
+                PathBuf::from(format!("part-{t}.exr")),
+                Part::from_portion(header(split, Split::WHOLE), &rows, pixels),
+            )
         };
         let err = merge(&[tile(0), tile(2)]).expect_err("missing").to_string();
         assert!(err.contains("1 of 3 parts are missing: tile 1/3"), "{err}");
@@ -601,7 +629,10 @@ mod tests {
         let mut other = tile(1);
         other.1.header.settings = "model=path spp=8".into();
         let err = merge(&[tile(0), other, tile(2)]).expect_err("settings").to_string();
-        assert!(err.contains("`part-0.exr` and `part-1.exr` are parts of different renders: their settings"), "{err}");
+        assert!(
+            err.contains("`part-0.exr` and `part-1.exr` are parts of different renders: their settings"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -12,7 +12,12 @@ use raytracer::{PreparedScene, render};
 use support::{load, workspace};
 
 /// Every part of a render split into `tiles` x `passes`, written to files, read back and merged.
-fn split_and_merge(scene: &PreparedScene, settings: &RenderSettings, tiles: u32, passes: u32) -> Vec<[f32; 3]> {
+fn split_and_merge(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    tiles: u32,
+    passes: u32,
+) -> Vec<[f32; 3]> {
     let dir = tempfile::tempdir().expect("temp dir");
     let settings = RenderSettings { runs: passes, ..settings.clone() };
     let mut parts = Vec::new();

@@ -12,8 +12,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::{
-    CONTRAST_THRESHOLD, MAX_NESTED_FACTOR, NOISE_GRID, NOISE_THRESHOLD, Progress, REFINE_GRID, RenderSettings,
-    RenderStats, Rows, Sampling, Stage, camera_for,
+    CONTRAST_THRESHOLD, MAX_NESTED_FACTOR, NOISE_GRID, NOISE_THRESHOLD, Progress, REFINE_GRID,
+    RenderSettings, RenderStats, Rows, Sampling, Stage, camera_for,
 };
 use crate::camera::Camera;
 use crate::integrator::Classic;
@@ -65,7 +65,8 @@ impl<'s> AdaptiveSampler<'s> {
             Sampling::Uniform(n) => (n, false),
         };
         // The rows the first pass traces: those asked for, and (adaptive) their neighbours.
-        let traced: Vec<u32> = if track_tags { rows.with_neighbours(self.height) } else { rows.ys().collect() };
+        let traced: Vec<u32> =
+            if track_tags { rows.with_neighbours(self.height) } else { rows.ys().collect() };
         let mut colors = vec![DVec3::ZERO; w * traced.len()];
         let n_tracked = if track_tags { colors.len() } else { 0 };
         let mut traces = vec![PixelTrace::default(); n_tracked];
@@ -250,7 +251,12 @@ impl Band<'_> {
 /// estimated error above [`NOISE_THRESHOLD`] (noise: more nested samples, as many more as the
 /// error says it needs, up to [`MAX_NESTED_FACTOR`] times; an edge pixel takes them in its grid,
 /// any other adds them with a `NOISE_GRID` grid to its first sample).
-fn pixels_to_refine(colors: &[DVec3], traces: &[PixelTrace], band: &Band, wanted: &[usize]) -> Vec<Refinement> {
+fn pixels_to_refine(
+    colors: &[DVec3],
+    traces: &[PixelTrace],
+    band: &Band,
+    wanted: &[usize],
+) -> Vec<Refinement> {
     let differs = |a: usize, b: usize| {
         traces[a].tag != traces[b].tag || (colors[a] - colors[b]).abs().max_element() > CONTRAST_THRESHOLD
     };

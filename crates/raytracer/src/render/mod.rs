@@ -425,7 +425,8 @@ fn render_run(
     let seed = run_seed(settings.seed, run);
     match settings.model {
         Model::Classic => {
-            let (colors, stats) = AdaptiveSampler::new(scene, Classic::new(scene), settings, seed).run(rows, progress);
+            let (colors, stats) =
+                AdaptiveSampler::new(scene, Classic::new(scene), settings, seed).run(rows, progress);
             (RunEstimate::Colors(colors), stats)
         }
         Model::Photon => {
@@ -434,7 +435,8 @@ fn render_run(
             let (map, photon_stats) = photon::build_photon_map(scene, &photon_settings, seed, &report);
             progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
             let integrator = Classic::with_photons(scene, PhotonEstimate::new(&map, &photon_settings));
-            let (colors, mut stats) = AdaptiveSampler::new(scene, integrator, settings, seed).run(rows, progress);
+            let (colors, mut stats) =
+                AdaptiveSampler::new(scene, integrator, settings, seed).run(rows, progress);
             stats.photons = Some(photon_stats);
             (RunEstimate::Colors(colors), stats)
         }
