@@ -31,8 +31,28 @@ enum Command {
     Terrain(terrain::TerrainArgs),
 }
 
+/// Exit status after an interruption (SIGINT or SIGTERM), as shells report Ctrl-C.
+const INTERRUPTED: i32 = 130;
+
+/// On Ctrl-C or SIGTERM: remove the image being written, if any, say so and exit with 130.
+fn stop_on_interrupt() {
+    let installed = ctrlc::set_handler(|| {
+        let removed = atomic_file::remove_unfinished();
+        let what = if removed > 0 { "; the unfinished output file was removed" } else { "" };
+        eprintln!("\nrayterra: interrupted{what}");
+        std::process::exit(INTERRUPTED);
+    });
+    if let Err(error) = installed {
+        eprintln!("warning: cannot handle Ctrl-C: {error}");
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if matches!(cli.command, Command::Terrain(_)) {
+        terrain::quiet_vulkan_device_select();
+    }
+    stop_on_interrupt();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
         Command::Merge(args) => merge::run(args),

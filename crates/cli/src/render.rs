@@ -5,14 +5,15 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use raytracer::image_io::{OutputFormat, write_image};
+use raytracer::image_io::{OutputFormat, check_output, write_image};
 use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::sppm::SppmStats;
 use raytracer::integrator::{Model, choose_model};
+use raytracer::memory::parse_byte_size;
 use raytracer::render::{DEFAULT_PATH_SPP, MAX_DEPTH_LIMIT, MAX_SPP, Progress, RenderStats, Stage};
-use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, SourceFile};
-use raytracer::{PreparedScene, RenderSettings, Sampling, TextureSearch};
+use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, MAX_KEPT_DIAGNOSTICS, Omitted, SourceFile};
+use raytracer::{MemoryBudget, PreparedScene, RenderSettings, Sampling, TextureSearch};
 
 /// The project's showcase scene, rendered when no scene file is given.
 const SHOWCASE: &str = include_str!("../../../scenes/showcase.txt");
@@ -86,6 +87,10 @@ pub struct RenderArgs {
           value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
     pub max_depth: u32,
 
+    /// Most memory the scene's textures and the photon map may take together, e.g. 512M or 8G.
+    #[arg(long, value_name = "SIZE", default_value = "4G", value_parser = parse_byte_size)]
+    pub memory_limit: u64,
+
     /// Parse and validate the scene (textures included) and print the warnings; render nothing.
     #[arg(long)]
     pub check: bool,
@@ -111,23 +116,40 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
 /// Runs `rayterra render`.
 pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let started = Instant::now();
+    // A bad output path or format is found before any work, not after the render.
+    let format = if args.check { OutputFormat::from_path(&args.output) } else { check_output(&args.output) }
+        .map_err(|e| fail(&e.to_string()))?;
     let source = match &args.scene {
         Some(path) => SourceFile::read(path).map_err(|e| fail(&e.to_string()))?,
         None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
     };
     let parsed = scene::parse(&source).map_err(|e| {
-        print_diagnostics(&e.diagnostics);
+        print_diagnostics_with(&e.diagnostics, e.omitted);
         let n = e.error_count();
         fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
     })?;
-    print_diagnostics(&parsed.diagnostics);
+    print_diagnostics_with(&parsed.diagnostics, parsed.omitted);
 
+    for dir in &args.textures {
+        if !dir.is_dir() {
+            let what = if dir.exists() { "is not a folder" } else { "does not exist" };
+            eprintln!(
+                "warning: --textures `{}` {what}; no texture or mesh is looked for there",
+                dir.display()
+            );
+        }
+    }
     let search =
         TextureSearch { scene_dir: source.dir().map(Path::to_path_buf), extra_dirs: args.textures.clone() };
-    let prepared = PreparedScene::new(parsed.scene, &search).map_err(|errors| {
+    let budget = MemoryBudget::new(args.memory_limit);
+    let prepared = PreparedScene::with_budget(parsed.scene, &search, &budget).map_err(|errors| {
         print_diagnostics(&errors);
-        fail(&format!("`{}` names textures that cannot be used; nothing was rendered", source.name()))
+        fail(&format!(
+            "`{}` names textures or meshes that cannot be used; nothing was rendered",
+            source.name()
+        ))
     })?;
+    print_diagnostics(&prepared.diagnostics);
     let prepare_time = started.elapsed();
 
     let mut settings = RenderSettings::for_scene(&prepared);
@@ -158,6 +180,8 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     settings.passes = args.passes;
     settings.max_depth = args.max_depth;
     warn_unused_options(&args, model);
+    // The photon map gets what the textures left of the memory limit.
+    settings.memory_limit = budget.remaining();
     scene::check_image_size(settings.width, settings.height).map_err(|m| fail(&m))?;
     let photon_settings = settings.photon_settings(&prepared);
     let memory = match model {
@@ -170,11 +194,17 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         ),
         Model::Classic | Model::Path => Ok(()),
     };
-    memory.map_err(|d| {
+    memory.map_err(|mut d| {
+        if budget.used() > 0 {
+            d.notes.push(format!(
+                "the scene's textures take {} of the memory limit of {} (--memory-limit)",
+                photon::format_bytes(budget.used()),
+                photon::format_bytes(budget.limit())
+            ));
+        }
         print_diagnostics(&[d]);
         fail(&format!("`{}` asks for more memory than a render may use; nothing was rendered", source.name()))
     })?;
-    let format = OutputFormat::from_path(&args.output).map_err(|e| fail(&e.to_string()))?;
     if format.is_linear() && args.gamma {
         eprintln!("warning: --gamma has no effect on linear {format:?} output");
     }
@@ -182,11 +212,12 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     if args.check {
         if !args.quiet {
             let scene = &prepared.scene;
+            let (primitives, lights) = (scene.primitives.len(), scene.lights.len());
             println!(
-                "{}: ok ({} primitives, {} lights, {}x{} pixels, {} model)",
+                "{}: ok ({primitives} primitive{}, {lights} light{}, {}x{} pixels, {} model)",
                 source.name(),
-                scene.primitives.len(),
-                scene.lights.len(),
+                plural(primitives),
+                plural(lights),
                 settings.width,
                 settings.height,
                 settings.model.name()
@@ -388,8 +419,35 @@ fn print_photon_summary(p: &PhotonStats) {
 }
 
 fn print_diagnostics(diagnostics: &[Diagnostic]) {
+    print_diagnostics_with(diagnostics, Omitted::default());
+}
+
+/// Prints at most [`MAX_KEPT_DIAGNOSTICS`] errors and as many warnings and notes, then one line
+/// counting the rest (those beyond the cap here and those the parser only counted).
+fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
+    let (mut errors, mut others) = (0, 0);
     for d in diagnostics {
-        eprintln!("{d}");
+        let (shown, more) = if d.is_error() {
+            (&mut errors, &mut omitted.errors)
+        } else {
+            (&mut others, &mut omitted.others)
+        };
+        if *shown < MAX_KEPT_DIAGNOSTICS {
+            *shown += 1;
+            eprintln!("{d}");
+        } else {
+            *more += 1;
+        }
+    }
+    let mut parts = Vec::new();
+    if omitted.errors > 0 {
+        parts.push(format!("{} more error{}", omitted.errors, plural(omitted.errors)));
+    }
+    if omitted.others > 0 {
+        parts.push(format!("{} more warning{} and notes", omitted.others, plural(omitted.others)));
+    }
+    if !parts.is_empty() {
+        eprintln!("... and {}\n", parts.join(" and "));
     }
 }
 

@@ -38,8 +38,8 @@ pub struct TerrainArgs {
     #[arg(long, value_name = "DIR", conflicts_with_all = ["heightmap", "seed", "grid"])]
     assets: Option<PathBuf>,
 
-    /// Use this greyscale image (8- or 16-bit PNG, BMP, ...; any size, square or not) as the
-    /// heightmap, with a colour map painted from its heights and the default sky, detail and water.
+    /// Use this greyscale image (8- or 16-bit PNG, BMP, ...; 2 to 8193 pixels a side, square or
+    /// not) as the heightmap, with a colour map painted from its heights and the default sky, detail and water.
     #[arg(long, value_name = "FILE", conflicts_with = "grid")]
     heightmap: Option<PathBuf>,
 
@@ -164,8 +164,8 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         return Err(no_display_message("neither DISPLAY nor WAYLAND_DISPLAY is set"));
     }
     if let Some(out) = &args.screenshot {
-        // Refuse an unwritable format before any work.
-        terrain::output::format_for(out).map_err(|error| error.to_string())?;
+        // Refuse an unwritable format or folder before any work.
+        terrain::output::check_output(out).map_err(|error| error.to_string())?;
     }
     let world = load_world(&args, &config)?;
     if let Some(dir) = &args.export_assets {
@@ -177,6 +177,41 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
     match &args.screenshot {
         Some(out) => screenshot(&args, &world, &config, pose, out),
         None => open_window(&args, &world, &config, pose),
+    }
+}
+
+/// Why the display could not be opened, for people: winit's message without the location in
+/// winit's own sources that it starts with, and the display that was tried.
+fn display_failure(reason: &str) -> String {
+    // winit says "os error at /path/to/winit/src/...rs:788: Failed to open connection to X server".
+    let reason = match reason.strip_prefix("os error at ") {
+        Some(rest) => rest
+            .split_once(".rs:")
+            .and_then(|(_, after)| after.split_once(": "))
+            .map_or(rest, |(_, message)| message),
+        None => reason,
+    };
+    let tried: Vec<String> = ["DISPLAY", "WAYLAND_DISPLAY"]
+        .into_iter()
+        .filter_map(|name| std::env::var(name).ok().filter(|v| !v.is_empty()).map(|v| format!("{name}={v}")))
+        .collect();
+    if tried.is_empty() { reason.to_string() } else { format!("{}: {reason}", tried.join(", ")) }
+}
+
+/// Keeps Mesa's Vulkan device-select layer from asking a Wayland compositor that cannot exist
+/// for the default GPU: without `XDG_RUNTIME_DIR` (headless machines, CI, ssh) libwayland
+/// prints "error: XDG_RUNTIME_DIR is invalid or not set in the environment." twice on every
+/// run. wgpu chooses the adapter itself, so the layer has nothing to add then. Must run before
+/// any other thread starts.
+pub fn quiet_vulkan_device_select() {
+    let runtime_dir_ok = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|dir| Path::new(&dir).is_dir());
+    if !runtime_dir_ok && std::env::var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: called first thing in `main`, before any other thread exists, so nothing can
+        // read the environment at the same time.
+        #[allow(unsafe_code)]
+        unsafe {
+            std::env::set_var("NODEVICE_SELECT", "1");
+        }
     }
 }
 
@@ -305,7 +340,7 @@ fn open_window(
         }
     };
     let summary = window::run(world, config, options, &mut notice).map_err(|error| match error {
-        window::WindowError::NoDisplay(reason) => no_display_message(&reason),
+        window::WindowError::NoDisplay(reason) => no_display_message(&display_failure(&reason)),
         other => other.to_string(),
     })?;
     if summary.frames > 0 {
@@ -322,6 +357,15 @@ fn open_window(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn display_failures_lose_winits_source_location() {
+        let reason = "os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/winit-0.30.13/src/platform_impl/linux/mod.rs:788: Failed to open connection to X server";
+        let shown = display_failure(reason);
+        assert!(shown.ends_with("Failed to open connection to X server"), "{shown}");
+        assert!(!shown.contains("winit") && !shown.contains(".rs"), "{shown}");
+        assert!(display_failure("no compositor").ends_with("no compositor"));
+    }
 
     #[test]
     fn field_of_view_and_time() {

@@ -49,12 +49,13 @@ fn local_render(dir: &Path, scene: &Path, args: &[&str]) -> Vec<u8> {
 
 /// Whether a Slurm cluster takes jobs here; a loud skip (or, under CI, a failure) when not.
 fn slurm_available() -> bool {
-    let up = Command::new("sinfo")
-        .args(["-h", "-o", "%T"])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .map(|o| String::from_utf8_lossy(&o.stdout).lines().any(|s| ["idle", "mixed", "allocated"].contains(&s.trim())));
+    let up = Command::new("sinfo").args(["-h", "-o", "%T"]).output().ok().filter(|o| o.status.success()).map(
+        |o| {
+            String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .any(|s| ["idle", "mixed", "allocated"].contains(&s.trim()))
+        },
+    );
     if up == Some(true) {
         return true;
     }
@@ -105,7 +106,11 @@ fn logs(dir: &Path) -> String {
     let mut text = String::new();
     for entry in std::fs::read_dir(dir).expect("dir").flatten() {
         if entry.file_name().to_string_lossy().ends_with(".log") {
-            text += &format!("--- {}\n{}", entry.path().display(), std::fs::read_to_string(entry.path()).unwrap_or_default());
+            text += &format!(
+                "--- {}\n{}",
+                entry.path().display(),
+                std::fs::read_to_string(entry.path()).unwrap_or_default()
+            );
         }
     }
     text
@@ -142,7 +147,10 @@ fn slurm_round_trip(name: &str, mode: &str, array_args: &str, local_args: &[&str
     wait_for_queue(Duration::from_secs(300));
     let merged = std::fs::read(&output).unwrap_or_else(|_| panic!("no merged image; logs:\n{}", logs(&dir)));
     assert_eq!(files_in(&dir.join("parts")), ["part-0.exr", "part-1.exr", "part-2.exr", "part-3.exr"]);
-    assert!(merged == local_render(&dir, &scene, local_args), "{mode}: the merged image differs from the local render");
+    assert!(
+        merged == local_render(&dir, &scene, local_args),
+        "{mode}: the merged image differs from the local render"
+    );
 }
 
 #[test]
@@ -186,7 +194,12 @@ fn a_cancelled_task_resubmitted_alone_completes_the_image() {
     let victim = format!("{job}_1");
     let start = Instant::now();
     while !queue().iter().any(|(id, state)| *id == victim && state == "RUNNING") {
-        assert!(start.elapsed() < Duration::from_secs(120), "task 1 never ran: {:?}\n{}", queue(), logs(&dir));
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "task 1 never ran: {:?}\n{}",
+            queue(),
+            logs(&dir)
+        );
         std::thread::sleep(Duration::from_millis(100));
     }
     std::thread::sleep(Duration::from_secs(2));
@@ -197,14 +210,21 @@ fn a_cancelled_task_resubmitted_alone_completes_the_image() {
     assert_eq!(files_in(&parts), ["part-0.exr", "part-2.exr", "part-3.exr"], "logs:\n{}", logs(&dir));
     assert!(!output.exists(), "the merge job ran although a part is missing");
     let stamps = |names: &[&str]| -> Vec<SystemTime> {
-        names.iter().map(|n| std::fs::metadata(parts.join(n)).and_then(|m| m.modified()).expect("part")).collect()
+        names
+            .iter()
+            .map(|n| std::fs::metadata(parts.join(n)).and_then(|m| m.modified()).expect("part"))
+            .collect()
     };
     let before = stamps(&["part-0.exr", "part-2.exr", "part-3.exr"]);
 
     submit(&dir, "1", &env("4"));
     wait_for_queue(Duration::from_secs(300));
     let merged = std::fs::read(&output).unwrap_or_else(|_| panic!("no merged image; logs:\n{}", logs(&dir)));
-    assert_eq!(stamps(&["part-0.exr", "part-2.exr", "part-3.exr"]), before, "a finished part was rendered again");
+    assert_eq!(
+        stamps(&["part-0.exr", "part-2.exr", "part-3.exr"]),
+        before,
+        "a finished part was rendered again"
+    );
     let local = local_render(&dir, &scene, &["--size", "128x128", "--model", "path", "--spp", "64"]);
     assert!(merged == local, "the completed image differs from the local render");
 }
@@ -221,14 +241,17 @@ fn container(docs: &[yaml_rust2::Yaml], name: &str) -> (Vec<(String, String)>, S
         .as_vec()
         .expect("env")
         .iter()
-        .map(|e| (e["name"].as_str().expect("name").to_owned(), e["value"].as_str().expect("value").to_owned()))
+        .map(|e| {
+            (e["name"].as_str().expect("name").to_owned(), e["value"].as_str().expect("value").to_owned())
+        })
         .collect();
     (env, c["args"][0].as_str().expect("script").to_owned())
 }
 
 #[test]
 fn the_kubernetes_jobs_commands_render_and_merge_the_image() {
-    let text = std::fs::read_to_string(workspace().join("deploy/kubernetes/render-job.yaml")).expect("manifest");
+    let text =
+        std::fs::read_to_string(workspace().join("deploy/kubernetes/render-job.yaml")).expect("manifest");
     let docs = yaml_rust2::YamlLoader::load_from_str(&text).expect("valid YAML");
     let render_job = docs
         .iter()
@@ -259,10 +282,18 @@ fn the_kubernetes_jobs_commands_render_and_merge_the_image() {
     let env = local(env);
     assert!(env.iter().any(|(k, v)| k == "PARTS" && *v == parts.to_string()), "PARTS matches completions");
     for index in 0..parts {
-        run(Command::new("sh").arg("-c").arg(&script).envs(env.clone()).env("JOB_COMPLETION_INDEX", index.to_string()).env("PATH", &path));
+        run(Command::new("sh")
+            .arg("-c")
+            .arg(&script)
+            .envs(env.clone())
+            .env("JOB_COMPLETION_INDEX", index.to_string())
+            .env("PATH", &path));
     }
     let (merge_env, merge_script) = container(&docs, "rayterra-merge");
     run(Command::new("sh").arg("-c").arg(&merge_script).envs(local(merge_env)).env("PATH", &path));
     let merged = std::fs::read(dir.join("final.png")).expect("merged image");
-    assert!(merged == local_render(&dir, &scene, &["--size", "80x80"]), "the merged image differs from the local render");
+    assert!(
+        merged == local_render(&dir, &scene, &["--size", "80x80"]),
+        "the merged image differs from the local render"
+    );
 }

@@ -79,7 +79,7 @@ fn check_validates_without_rendering() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     assert!(text(&out.stderr).contains("warning: unknown key `gloss=` in `primitive sphere`; ignored"));
     assert!(
-        text(&out.stdout).contains("scene.txt: ok (3 primitives, 1 lights, 40x30 pixels, classic model)"),
+        text(&out.stdout).contains("scene.txt: ok (3 primitives, 1 light, 40x30 pixels, classic model)"),
         "{}",
         text(&out.stdout)
     );
@@ -88,8 +88,37 @@ fn check_validates_without_rendering() {
     assert!(builtin.status.success(), "{}", text(&builtin.stderr));
     assert!(
         text(&builtin.stdout)
-            .contains("showcase.txt (built in): ok (9 primitives, 1 lights, 1280x760 pixels, classic model)")
+            .contains("showcase.txt (built in): ok (9 primitives, 1 light, 1280x760 pixels, classic model)")
     );
+}
+
+#[test]
+fn thousands_of_errors_print_fifty_and_a_count() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    // 100,000 unclosed blocks: 300,000 errors.
+    std::fs::write(dir.path().join("blocks.txt"), "primitive sphere\n".repeat(100_000)).expect("write");
+    let out = rayterra(&["render", "blocks.txt"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert_eq!(stderr.matches("error: the `primitive sphere` block has no `end`").count(), 17, "{stderr}");
+    assert!(stderr.contains("\n... and 299950 more errors\n"), "{stderr}");
+    assert!(stderr.ends_with("error: `blocks.txt` has 300000 errors; nothing was rendered\n"), "{stderr}");
+    assert!(stderr.len() < 20_000, "{} bytes", stderr.len());
+}
+
+#[test]
+fn scene_paths_that_are_not_files_are_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = rayterra(&["render", "."], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("cannot read scene file `.`: it is a directory"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = rayterra(&["render", "/dev/zero", "--check"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("it is not a regular file"), "{}", text(&out.stderr));
 }
 
 #[test]
@@ -120,17 +149,48 @@ fn missing_texture_is_an_error_at_its_line() {
 }
 
 #[test]
+fn memory_limit_bounds_the_textures_and_missing_texture_folders_are_warned_about() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    image::GrayImage::new(1024, 1024).save(dir.path().join("big.png")).expect("png");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE.replace("builtin:marble", "big.png"))
+        .expect("write");
+    let out = rayterra(&["render", "scene.txt", "--check", "--memory-limit", "6M"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("texture `big.png` (1024x1024 pixels) needs 8.0 MiB"), "{stderr}");
+    assert!(
+        stderr.contains("over the memory limit of 6.0 MiB") && stderr.contains("scene.txt:18:11"),
+        "{stderr}"
+    );
+    let out = rayterra(&["render", "scene.txt", "--check", "--textures", "nowhere"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stderr)
+            .contains("warning: --textures `nowhere` does not exist; no texture or mesh is looked for there"),
+        "{}",
+        text(&out.stderr)
+    );
+    let out = rayterra(&["render", "scene.txt", "--check", "--memory-limit", "lots"], dir.path());
+    assert_eq!(out.status.code(), Some(2), "a malformed option");
+}
+
+#[test]
 fn bad_requests_are_refused_without_output() {
     let dir = tempfile::tempdir().expect("temp dir");
     std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
-    let cases: [(&[&str], i32, &str); 7] = [
+    let cases: [(&[&str], i32, &str); 8] = [
         (&["render", "scene.txt", "--size", "100000x100000"], 2, "out of range"),
         (&["render", "scene.txt", "--size", "30000x30000"], 1, "too large"),
         (&["render", "scene.txt", "--size", "12"], 2, "expected WIDTHxHEIGHT"),
         (&["render", "scene.txt", "-o", "out.gif"], 1, "use .png, .bmp, .exr or .hdr"),
         (&["render", "scene.txt", "--spp", "0"], 2, "--spp"),
         (&["render", "no-such-scene.txt"], 1, "cannot read scene file `no-such-scene.txt`"),
-        (&["render", "scene.txt", "-o", "no/such/dir/out.png"], 1, "cannot write"),
+        (
+            &["render", "scene.txt", "-o", "no/such/dir/out.png"],
+            1,
+            "cannot write `no/such/dir/out.png`: the folder",
+        ),
+        (&["render", "scene.txt", "-o", "."], 1, "cannot tell the image format of `.`"),
     ];
     for (args, code, message) in cases {
         let out = rayterra(args, dir.path());
@@ -331,4 +391,89 @@ fn sppm_refuses_more_pixels_than_max_hitpoints_allows() {
     assert!(stderr.contains("1200 pixels, but `max_hitpoints= 1000` allows fewer"), "{stderr}");
     assert!(stderr.contains("scene.txt:9:"), "{stderr}");
     assert!(!dir.path().join("out.png").exists());
+}
+
+/// A scene that takes a few seconds at 2048x2048, most of it rendering, then ~0.2 s writing.
+#[cfg(unix)]
+const SLOW_SCENE: &str = "camera\n O= 0 -4 0\n N= 0 1 0\n lens_W= 1\n lens_H= 1\nend\n\
+                          light point\n O= 0 -3 3\n color= 1 1 1\nend\n\
+                          primitive sphere\n O= 0 0 0\n R= 2.5\n diff= 1\n texture= builtin:marble\nend\n";
+
+#[cfg(unix)]
+fn send_signal(child: &std::process::Child, signal: &str) {
+    let status = Command::new("kill").args([signal, &child.id().to_string()]).status().expect("kill");
+    assert!(status.success());
+}
+
+#[cfg(unix)]
+fn file_names(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .expect("list")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect()
+}
+
+#[cfg(unix)]
+#[test]
+fn an_interrupted_write_removes_its_temporary_file_and_exits_130() {
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SLOW_SCENE).expect("write scene");
+    // Catch the process while its temporary file exists; a very fast machine may write it before
+    // it is seen, so a larger image is tried then.
+    for side in [2048, 4096] {
+        let size = format!("{side}x{side}");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+            .args(["render", "scene.txt", "-q", "--size", &size, "-o", "out.png"])
+            .current_dir(dir.path())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run rayterra");
+        let started = Instant::now();
+        let mut caught = false;
+        while started.elapsed() < Duration::from_secs(300) {
+            if file_names(dir.path()).iter().any(|n| n.ends_with(".part")) {
+                send_signal(&child, "-INT");
+                caught = true;
+                break;
+            }
+            if child.try_wait().expect("wait").is_some() {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let out = child.wait_with_output().expect("wait");
+        if !caught {
+            assert!(out.status.success(), "{}", text(&out.stderr));
+            std::fs::remove_file(dir.path().join("out.png")).expect("rm");
+            continue;
+        }
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "{stderr}");
+        assert!(stderr.contains("rayterra: interrupted; the unfinished output file was removed"), "{stderr}");
+        assert_eq!(file_names(dir.path()), ["scene.txt"], "nothing left behind");
+        return;
+    }
+    panic!("the temporary file was never seen while the image was written");
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_during_a_render_exits_130_without_output() {
+    use std::time::Duration;
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SLOW_SCENE).expect("write scene");
+    let child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(["render", "scene.txt", "-q", "--size", "4096x4096", "-o", "out.png"])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run rayterra");
+    std::thread::sleep(Duration::from_millis(500));
+    send_signal(&child, "-TERM");
+    let out = child.wait_with_output().expect("wait");
+    assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
+    assert!(text(&out.stderr).contains("rayterra: interrupted"), "{}", text(&out.stderr));
+    assert_eq!(file_names(dir.path()), ["scene.txt"]);
 }

@@ -1,8 +1,7 @@
 //! Rendered images and writing them: PNG (default), BMP, OpenEXR and Radiance HDR, chosen by the
-//! file extension. Files are written to a temporary file beside the target and renamed into
-//! place, so a failed write never leaves a half image.
+//! file extension. Files are written to a temporary file created exclusively beside the target
+//! and renamed into place (the `atomic-file` crate), so a failed write never leaves a half image.
 
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use image::{ImageFormat, Rgb32FImage, RgbImage};
@@ -104,74 +103,30 @@ pub enum WriteError {
     /// The extension names no supported format.
     #[error("cannot tell the image format of `{}`: use .png, .bmp, .exr or .hdr", .0.display())]
     UnknownFormat(PathBuf),
-    /// The file system refused.
-    #[error("cannot write `{}`: {source}", .path.display())]
-    Io {
-        /// The target.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The encoder failed.
-    #[error("cannot encode `{}`: {source}", .path.display())]
-    Encode {
-        /// The target.
-        path: PathBuf,
-        /// Why.
-        #[source]
-        source: image::ImageError,
-    },
+    /// The file could not be written (missing folder, no permission, disk full, encoder error);
+    /// the message names the target.
+    #[error(transparent)]
+    File(#[from] atomic_file::WriteError<image::ImageError>),
+}
+
+/// Checks, before rendering, that an image can be written to `path`: its extension names a
+/// format and its folder exists and takes a new file. Nothing is left behind.
+pub fn check_output(path: &Path) -> Result<OutputFormat, WriteError> {
+    let format = OutputFormat::from_path(path)?;
+    atomic_file::check_writable(path)?;
+    Ok(format)
 }
 
 /// Writes `image` to `path` in the format its extension names. 8-bit formats are sRGB-encoded
 /// when `gamma` is set; linear formats ignore it.
 pub fn write_image(image: &Image, path: &Path, gamma: bool) -> Result<(), WriteError> {
     let format = OutputFormat::from_path(path)?;
-    let mut encoded = Ok(());
-    let written = write_atomically(path, |out| {
-        let result = match format {
-            OutputFormat::Png => image.to_rgb8(gamma).write_to(out, ImageFormat::Png),
-            OutputFormat::Bmp => image.to_rgb8(gamma).write_to(out, ImageFormat::Bmp),
-            OutputFormat::Exr => image.to_rgb32f().write_to(out, ImageFormat::OpenExr),
-            OutputFormat::Hdr => image.to_rgb32f().write_to(out, ImageFormat::Hdr),
-        };
-        match result {
-            Ok(()) => out.flush(),
-            Err(image::ImageError::IoError(e)) => Err(e),
-            Err(source) => {
-                encoded = Err(WriteError::Encode { path: path.to_path_buf(), source });
-                Err(std::io::Error::other("encoding failed"))
-            }
-        }
-    });
-    encoded.and(written)
-}
-
-/// Writes a file whole or not at all: `write` fills a temporary file beside `path`, which is then
-/// renamed into place (and removed when `write` fails).
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> std::io::Result<()>,
-) -> Result<(), WriteError> {
-    let io = |source| WriteError::Io { path: path.to_path_buf(), source };
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".rayterra-").suffix(".part");
-    // A temporary file is private; the image should be created like any other file (0666
-    // less the umask).
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut tmp = builder.tempfile_in(dir).map_err(io)?;
-    {
-        let mut out = BufWriter::new(tmp.as_file_mut());
-        write(&mut out).map_err(io)?;
-        out.flush().map_err(io)?;
-    }
-    tmp.persist(path).map_err(|e| io(e.error))?;
+    atomic_file::write_atomically(path, |out| match format {
+        OutputFormat::Png => image.to_rgb8(gamma).write_to(out, ImageFormat::Png),
+        OutputFormat::Bmp => image.to_rgb8(gamma).write_to(out, ImageFormat::Bmp),
+        OutputFormat::Exr => image.to_rgb32f().write_to(out, ImageFormat::OpenExr),
+        OutputFormat::Hdr => image.to_rgb32f().write_to(out, ImageFormat::Hdr),
+    })?;
     Ok(())
 }
 
@@ -212,6 +167,21 @@ mod tests {
 
     #[cfg(unix)]
     #[test]
+    fn a_full_disk_under_the_exr_encoder_says_so() {
+        // /dev/full fails every write with "No space left on device"; the EXR encoder itself
+        // calls that "Format error decoding OpenExr".
+        let Ok(mut full) = std::fs::File::options().write(true).open("/dev/full") else { return };
+        let big = Image::new(64, 64, vec![[0.5; 3]; 64 * 64]);
+        let err = atomic_file::encode_into(&mut full, Path::new("out.exr"), |w| {
+            big.to_rgb32f().write_to(w, ImageFormat::OpenExr)
+        })
+        .expect_err("disk full")
+        .to_string();
+        assert!(err.starts_with("cannot write `out.exr`: No space left on device"), "{err}");
+    }
+
+    #[cfg(unix)]
+    #[test]
     fn written_files_get_ordinary_permissions() {
         use std::os::unix::fs::PermissionsExt;
         let dir = tempfile::tempdir().expect("temp dir");
@@ -227,7 +197,12 @@ mod tests {
         let err = write_image(&tiny(), &dir.path().join("out.gif"), false).expect_err("gif");
         assert!(err.to_string().contains(".png, .bmp, .exr or .hdr"), "{err}");
         let missing = dir.path().join("no/such/folder/out.png");
-        assert!(matches!(write_image(&tiny(), &missing, false), Err(WriteError::Io { .. })));
+        let err = write_image(&tiny(), &missing, false).expect_err("no folder");
+        assert!(err.to_string().contains("the folder"), "{err}");
+        let err = check_output(&missing).expect_err("no folder");
+        assert!(err.to_string().starts_with(&format!("cannot write `{}`", missing.display())), "{err}");
+        assert!(check_output(&dir.path().join("out.gif")).is_err());
+        assert_eq!(check_output(&dir.path().join("out.EXR")).ok(), Some(OutputFormat::Exr));
         assert_eq!(std::fs::read_dir(dir.path()).expect("list").count(), 0);
     }
 }

@@ -18,6 +18,7 @@ pub mod image_io;
 pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod memory;
 pub mod parts;
 pub mod prepare;
 pub mod procedural;
@@ -28,5 +29,6 @@ pub mod scene;
 pub mod texture;
 
 pub use image_io::Image;
+pub use memory::MemoryBudget;
 pub use prepare::{PreparedScene, TextureSearch};
 pub use render::{RenderSettings, Rendered, Sampling, render};

@@ -44,7 +44,7 @@ impl Light {
     pub fn shape(&self) -> Option<Shape> {
         match self {
             Light::Point { .. } => None,
-            Light::Square { shape, .. } => Some(Shape::Square(shape.clone())),
+            Light::Square { shape, .. } => Some(Shape::Square(Box::new(shape.clone()))),
             Light::Sphere { shape, .. } => Some(Shape::Sphere(shape.clone())),
         }
     }

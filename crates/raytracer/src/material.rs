@@ -12,6 +12,10 @@ pub struct Material {
     pub color: DVec3,
     /// Texture multiplied into the colour (`texture=`).
     pub texture: Option<TextureRef>,
+    /// Tangent-space normal map over the texture coordinates (`bump=`, or `NT=`): red along the
+    /// direction in which `v` (the texture's column) grows, green along `u` (its row, counted from
+    /// the bottom), blue along the normal; each channel `c` maps to `2 c - 1`.
+    pub bump: Option<TextureRef>,
     /// Diffuse weight (`diff=`).
     pub diff: f64,
     /// Highlight weight (`spec=`), with the view-independent `(N.L)^20` lobe.
@@ -34,6 +38,7 @@ impl Default for Material {
         Material {
             color: DVec3::ZERO,
             texture: None,
+            bump: None,
             diff: 0.0,
             spec: 0.0,
             refl: 0.0,

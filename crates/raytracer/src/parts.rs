@@ -26,7 +26,7 @@
 
 use std::collections::BTreeMap;
 use std::fmt;
-use std::io::{BufReader, BufWriter, Write};
+use std::io::BufReader;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -36,7 +36,7 @@ use exr::prelude::{
 };
 use sha2::{Digest, Sha256};
 
-use crate::image_io::{Image, WriteError, write_atomically};
+use crate::image_io::Image;
 use crate::render::{PortionPixels, Rows};
 use crate::sampler::ExactSum;
 use crate::scene::MAX_IMAGE_SIDE;
@@ -222,8 +222,11 @@ const ATTR_TILE: &str = "rayterra.tile";
 const ATTR_PASS: &str = "rayterra.pass";
 const ATTR_SAMPLES: &str = "rayterra.samples";
 
+/// Why a part file could not be written; the message names the target.
+pub type PartWriteError = atomic_file::WriteError<exr::error::Error>;
+
 /// Writes `part` to `path` as an OpenEXR part file, whole or not at all.
-pub fn write_part(part: &Part, path: &Path) -> Result<(), WriteError> {
+pub fn write_part(part: &Part, path: &Path) -> Result<(), PartWriteError> {
     let h = &part.header;
     let mut attributes =
         ImageAttributes::new(IntegerBounds::new((0, 0), (h.width as usize, h.height as usize)));
@@ -269,10 +272,7 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), WriteError> {
         })
         .collect();
     let image = ExrImage::from_layers(attributes, layers);
-    write_atomically(path, |out: &mut BufWriter<&mut std::fs::File>| {
-        image.write().to_buffered(&mut *out).map_err(|e| std::io::Error::other(e.to_string()))?;
-        out.flush()
-    })
+    atomic_file::write_atomically(path, |out| image.write().to_buffered(out))
 }
 
 /// The text of an attribute, with anything but printable ASCII replaced (EXR text is bytes).

@@ -1,8 +1,12 @@
 //! Textures: images (BMP, PNG, JPEG) and the project's built-in procedural textures, and how a
 //! scene names them.
 
+use std::io::{BufRead, Seek};
+use std::path::{Path, PathBuf};
+
 use glam::DVec3;
 
+use crate::memory::{MemoryBudget, OverBudget};
 use crate::scene::Location;
 
 /// A `texture=` value as written in a scene file, with where it was written (for messages).
@@ -112,15 +116,136 @@ pub enum TextureError {
         /// Where it was looked for.
         searched: Vec<std::path::PathBuf>,
     },
+    /// The path names a folder.
+    #[error("texture `{}` is a directory, not an image file", .path.display())]
+    Directory {
+        /// The folder.
+        path: PathBuf,
+    },
+    /// The path names a device, a pipe or a socket.
+    #[error("texture `{}` is not a regular file", .path.display())]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+    },
+    /// The image is wider or taller than [`MAX_TEXTURE_SIDE`] (found from its header, before
+    /// decoding).
+    #[error(
+        "texture `{}` is {width}x{height} pixels, larger than the {MAX_TEXTURE_SIDE} pixels a side a texture may have",
+        .path.display()
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+    },
+    /// The image has no pixels (a width or a height of 0).
+    #[error("texture `{}` is an empty image ({width}x{height} pixels)", .path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+    },
+    /// Decoding and keeping the image would take the scene past its memory budget.
+    #[error("texture `{}` ({width}x{height} pixels) {over}", .path.display())]
+    OverBudget {
+        /// The file.
+        path: PathBuf,
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+        /// The budget's numbers.
+        over: OverBudget,
+    },
     /// Found but unreadable or not a supported image.
     #[error("cannot read texture `{}`: {source}", .path.display())]
     Unreadable {
         /// The file.
-        path: std::path::PathBuf,
+        path: PathBuf,
         /// What went wrong.
         #[source]
         source: image::ImageError,
     },
+}
+
+/// What an image file's header says, read without decoding the picture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageInfo {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Bytes the texture keeps ([`memory_bytes`]).
+    pub kept_bytes: u64,
+    /// Bytes needed only while decoding: the decoded image, and its conversion to 8-bit RGB.
+    pub decoding_bytes: u64,
+}
+
+/// Bytes a texture of `width` x `height` texels keeps in memory: 4-byte texels in 4 x 4 tiles.
+pub fn memory_bytes(width: u32, height: u32) -> u64 {
+    u64::from(width.div_ceil(TILE)) * u64::from(height.div_ceil(TILE)) * u64::from(TILE * TILE * 4)
+}
+
+/// An image decoder for a file or bytes, its format recognised from the content, whose header
+/// has been read and checked against [`MAX_TEXTURE_SIDE`]; nothing is decoded yet.
+fn open_decoder<'a, R: BufRead + Seek + 'a>(
+    reader: image::ImageReader<R>,
+    path: &Path,
+) -> Result<(impl image::ImageDecoder + use<'a, R>, ImageInfo), TextureError> {
+    let unreadable = |source| TextureError::Unreadable { path: path.to_path_buf(), source };
+    let mut reader = reader.with_guessed_format().map_err(|e| unreadable(image::ImageError::IoError(e)))?;
+    // The header is read without limits on the size, so that a size over the limit can be
+    // named; nothing in proportion to the size is allocated before it is checked below.
+    let mut limits = image::Limits::no_limits();
+    limits.max_alloc = Some(64 << 20);
+    reader.limits(limits);
+    let mut decoder = reader.into_decoder().map_err(unreadable)?;
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    if width > MAX_TEXTURE_SIDE || height > MAX_TEXTURE_SIDE {
+        return Err(TextureError::TooLarge { path: path.to_path_buf(), width, height });
+    }
+    if width == 0 || height == 0 {
+        // Found by fuzzing: a Radiance header may say `-Y 0 +X 8`, and a lookup in an empty
+        // texture has no texel to read.
+        return Err(TextureError::Empty { path: path.to_path_buf(), width, height });
+    }
+    let decoded = image::ImageDecoder::total_bytes(&decoder);
+    let rgb8 = image::ImageDecoder::color_type(&decoder) == image::ColorType::Rgb8;
+    let conversion = if rgb8 { 0 } else { 3 * u64::from(width) * u64::from(height) };
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(width);
+    limits.max_image_height = Some(height);
+    // The picture itself, and whatever the decoder needs beside it (palettes, rows, metadata).
+    limits.max_alloc = Some(decoded.saturating_add(64 << 20));
+    image::ImageDecoder::set_limits(&mut decoder, limits).map_err(unreadable)?;
+    let info = ImageInfo {
+        width,
+        height,
+        kept_bytes: memory_bytes(width, height),
+        decoding_bytes: decoded + conversion,
+    };
+    Ok((decoder, info))
+}
+
+/// Opens an image file, refusing folders and devices.
+fn open_file(path: &Path) -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, TextureError> {
+    let unreadable =
+        |e| TextureError::Unreadable { path: path.to_path_buf(), source: image::ImageError::IoError(e) };
+    let metadata = std::fs::metadata(path).map_err(unreadable)?;
+    if metadata.is_dir() {
+        return Err(TextureError::Directory { path: path.to_path_buf() });
+    }
+    if !metadata.is_file() {
+        return Err(TextureError::NotAFile { path: path.to_path_buf() });
+    }
+    image::ImageReader::open(path).map_err(unreadable)
 }
 
 fn display_paths(paths: &[std::path::PathBuf]) -> String {
@@ -146,28 +271,63 @@ impl Texture {
         Texture { width, height, tiles_x, texels }
     }
 
+    /// Reads an image file's header: its size and the memory it would take, without decoding
+    /// it. Folders, devices and images over [`MAX_TEXTURE_SIDE`] a side are refused.
+    pub fn probe(path: &Path) -> Result<ImageInfo, TextureError> {
+        open_decoder(open_file(path)?, path).map(|(_, info)| info)
+    }
+
     /// Decodes an image file (BMP, PNG or JPEG; palettised, grey or colour) into a texture.
     /// Channels are scaled as the course did: an 8-bit value `b` becomes `b / 256`; 16-bit images
-    /// are reduced to their high byte.
-    pub fn load(path: &std::path::Path) -> Result<Texture, TextureError> {
-        let unreadable = |source| TextureError::Unreadable { path: path.to_path_buf(), source };
-        let mut reader = image::ImageReader::open(path)
-            .map_err(|e| unreadable(image::ImageError::IoError(e)))?
-            .with_guessed_format()
-            .map_err(|e| unreadable(image::ImageError::IoError(e)))?;
-        let mut limits = image::Limits::default();
-        limits.max_image_width = Some(MAX_TEXTURE_SIDE);
-        limits.max_image_height = Some(MAX_TEXTURE_SIDE);
-        reader.limits(limits);
-        let img = reader.decode().map_err(unreadable)?;
-        Ok(Texture::from_image(&img))
+    /// are reduced to their high byte. The size is checked from the header before decoding
+    /// (at most [`MAX_TEXTURE_SIDE`] a side), and the decoder may allocate no more than the
+    /// picture needs.
+    pub fn load(path: &Path) -> Result<Texture, TextureError> {
+        Texture::decode(open_file(path)?, path, &MemoryBudget::new(u64::MAX))
+    }
+
+    /// Decodes an image held in memory, as [`Texture::load`] decodes a file, charging `budget`
+    /// for the memory the texture keeps (`name` is used in messages).
+    pub fn from_bytes(bytes: &[u8], name: &str, budget: &MemoryBudget) -> Result<Texture, TextureError> {
+        let reader = image::ImageReader::new(std::io::Cursor::new(bytes));
+        Texture::decode(reader, Path::new(name), budget)
+    }
+
+    /// Decodes after checking the header and charging `budget` with the texture's memory (the
+    /// memory needed while decoding is charged, then given back).
+    fn decode<R: BufRead + Seek>(
+        reader: image::ImageReader<R>,
+        path: &Path,
+        budget: &MemoryBudget,
+    ) -> Result<Texture, TextureError> {
+        let (decoder, info) = open_decoder(reader, path)?;
+        let over = |over| TextureError::OverBudget {
+            path: path.to_path_buf(),
+            width: info.width,
+            height: info.height,
+            over,
+        };
+        budget.charge(info.kept_bytes + info.decoding_bytes).map_err(over)?;
+        let texture = Texture::decode_checked(decoder, path);
+        budget.release(info.decoding_bytes);
+        if texture.is_err() {
+            budget.release(info.kept_bytes);
+        }
+        texture
+    }
+
+    /// Decodes from a decoder whose header [`open_decoder`] checked.
+    fn decode_checked(decoder: impl image::ImageDecoder, path: &Path) -> Result<Texture, TextureError> {
+        let img = image::DynamicImage::from_decoder(decoder)
+            .map_err(|source| TextureError::Unreadable { path: path.to_path_buf(), source })?;
+        Ok(Texture::from_image(img))
     }
 
     /// Converts a decoded image.
-    pub fn from_image(img: &image::DynamicImage) -> Texture {
-        let rgb = img.to_rgb8();
-        let texels: Vec<[u8; 3]> = rgb.pixels().map(|p| p.0).collect();
-        Texture::from_top_down(img.width(), img.height(), &texels)
+    pub fn from_image(img: impl Into<image::DynamicImage>) -> Texture {
+        let rgb = img.into().into_rgb8();
+        let (texels, _) = rgb.as_raw().as_chunks::<3>();
+        Texture::from_top_down(rgb.width(), rgb.height(), texels)
     }
 
     /// Width in texels.
@@ -271,9 +431,19 @@ mod tests {
     fn eight_bit_values_are_divided_by_256() {
         let img =
             image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(1, 1, image::Rgb([128, 255, 0])));
-        let t = Texture::from_image(&img);
+        let t = Texture::from_image(img);
         assert_eq!(t.texel(0, 0), [0.5, 255.0 / 256.0, 0.0]);
         assert_eq!(t.sample(0.3, 0.7), DVec3::new(0.5, 255.0 / 256.0, 0.0));
+    }
+
+    #[test]
+    fn empty_images_are_refused() {
+        // A Radiance file 8 pixels wide and 0 high (the fuzzer's first crash: the lookup in the
+        // empty texture underflowed).
+        let hdr = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 8\n";
+        let err = Texture::from_bytes(hdr, "empty.hdr", &MemoryBudget::new(1 << 20)).expect_err("empty");
+        assert!(matches!(err, TextureError::Empty { width: 8, height: 0, .. }), "{err}");
+        assert_eq!(err.to_string(), "texture `empty.hdr` is an empty image (8x0 pixels)");
     }
 
     #[test]

@@ -1,5 +1,7 @@
-//! Writing images safely: to a temporary file in the destination's folder, then renamed into
-//! place, so a failure never leaves a half-written file under the requested name.
+//! Writing images safely: to a temporary file created exclusively in the destination's folder,
+//! then renamed into place (the `atomic-file` crate, shared with the ray tracer), so a failure
+//! never leaves a half-written file under the requested name and a planted file or symlink is
+//! never followed.
 
 use std::path::{Path, PathBuf};
 
@@ -8,27 +10,22 @@ use image::{DynamicImage, ImageFormat};
 /// Why an image could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum SaveError {
-    /// The file system refused (missing folder, no permission, disk full...).
+    /// The file system refused to make a folder for the file.
     #[error("cannot write {}: {source}", path.display())]
     Io {
-        /// The file being written.
+        /// The file or folder being written.
         path: PathBuf,
         /// What the system said.
         source: std::io::Error,
     },
+    /// The file could not be written (missing folder, no permission, disk full, encoder error).
+    #[error(transparent)]
+    File(#[from] atomic_file::WriteError<image::ImageError>),
     /// The file name's extension names no image format this program writes.
     #[error("cannot tell which image format to write for {}: use .png, .bmp or .jpg", path.display())]
     UnknownFormat {
         /// The file.
         path: PathBuf,
-    },
-    /// The encoder failed (e.g. an image too large for the format).
-    #[error("cannot encode {}: {source}", path.display())]
-    Encode {
-        /// The file being written.
-        path: PathBuf,
-        /// What the encoder said.
-        source: image::ImageError,
     },
 }
 
@@ -38,6 +35,14 @@ pub fn format_for(path: &Path) -> Result<ImageFormat, SaveError> {
         Ok(format @ (ImageFormat::Png | ImageFormat::Bmp | ImageFormat::Jpeg)) => Ok(format),
         _ => Err(SaveError::UnknownFormat { path: path.to_path_buf() }),
     }
+}
+
+/// Checks, before rendering, that a frame can be written to `path`: its extension names a
+/// format and its folder exists and takes a new file. Nothing is left behind.
+pub fn check_output(path: &Path) -> Result<ImageFormat, SaveError> {
+    let format = format_for(path)?;
+    atomic_file::check_writable(path)?;
+    Ok(format)
 }
 
 /// Writes a rendered frame to `path` in the format its extension names (PNG keeps the alpha
@@ -55,27 +60,8 @@ pub fn save_frame(frame: &image::RgbaImage, path: &Path) -> Result<(), SaveError
 /// Writes `image` to `path` in `format`, atomically: the image is encoded into a temporary file
 /// beside `path`, which is then renamed over it.
 pub fn save_image(image: &DynamicImage, path: &Path, format: ImageFormat) -> Result<(), SaveError> {
-    let io_error = |source| SaveError::Io { path: path.to_path_buf(), source };
-    let folder = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().map_or_else(|| "image".into(), |name| name.to_string_lossy().into_owned());
-    let temporary = folder.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let file = std::fs::File::create(&temporary).map_err(io_error)?;
-        let mut writer = std::io::BufWriter::new(file);
-        image
-            .write_to(&mut writer, format)
-            .map_err(|source| SaveError::Encode { path: path.to_path_buf(), source })?;
-        let file = writer.into_inner().map_err(|error| io_error(error.into_error()))?;
-        file.sync_all().map_err(io_error)?;
-        std::fs::rename(&temporary, path).map_err(io_error)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&temporary);
-    }
-    result
+    atomic_file::write_atomically(path, |writer| image.write_to(writer, format))?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -99,6 +85,32 @@ mod tests {
         let error = save_image(&image, &missing, ImageFormat::Png).expect_err("no folder");
         assert!(error.to_string().contains("no-such-folder"), "{error}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_planted_symlink_is_not_followed() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let victim = dir.path().join("victim.txt");
+        std::fs::write(&victim, b"precious").expect("write");
+        // The name the terrain's writer used to make up from the target and the process id.
+        let planted = dir.path().join(format!(".shot.png.{}.tmp", std::process::id()));
+        std::os::unix::fs::symlink(&victim, &planted).expect("symlink");
+        let image = DynamicImage::ImageRgba8(image::RgbaImage::from_pixel(2, 2, image::Rgba([9, 9, 9, 255])));
+        save_image(&image, &dir.path().join("shot.png"), ImageFormat::Png).expect("writable");
+        assert_eq!(std::fs::read(&victim).expect("read"), b"precious");
+        assert!(std::fs::symlink_metadata(&planted).expect("still there").file_type().is_symlink());
+    }
+
+    #[test]
+    fn output_is_checked_before_rendering() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let missing = dir.path().join("no-such-folder/shot.png");
+        let error = check_output(&missing).expect_err("no folder").to_string();
+        assert!(error.contains("shot.png") && error.contains("does not exist"), "{error}");
+        assert!(matches!(check_output(&dir.path().join("a.gif")), Err(SaveError::UnknownFormat { .. })));
+        assert_eq!(check_output(&dir.path().join("a.jpg")).ok(), Some(ImageFormat::Jpeg));
+        assert_eq!(std::fs::read_dir(dir.path()).expect("list").count(), 0, "nothing left behind");
     }
 
     #[test]

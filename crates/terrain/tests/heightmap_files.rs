@@ -103,3 +103,25 @@ fn the_course_heightmap_is_a_palettised_bmp() {
     let highest = map.levels().iter().copied().fold(0.0, f32::max);
     assert_eq!(highest, 251.0);
 }
+
+/// The heightmap fuzz target's seed corpus and every input a fuzzer ever crashed on
+/// (`fuzz/seeds/heightmap`, `fuzz/regressions/heightmap`), run through the same code as the
+/// target, so a fixed crash stays fixed without a fuzzer at hand.
+#[test]
+fn fuzz_inputs_load_or_fail_cleanly() {
+    let fuzz = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz");
+    let mut count = 0;
+    for kind in ["seeds", "regressions"] {
+        let Ok(entries) = std::fs::read_dir(fuzz.join(kind).join("heightmap")) else { continue };
+        for entry in entries.filter_map(Result::ok) {
+            let bytes = std::fs::read(entry.path()).expect("readable input");
+            let loaded = Heightmap::decode(&bytes, &entry.path().display().to_string());
+            if kind == "seeds" {
+                let map = loaded.unwrap_or_else(|e| panic!("a seed must load: {e}"));
+                assert!(map.levels().iter().all(|l| l.is_finite()));
+            }
+            count += 1;
+        }
+    }
+    assert!(count > 0, "no seed inputs under {}", fuzz.display());
+}

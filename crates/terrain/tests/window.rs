@@ -38,12 +38,19 @@ fn main() {
 fn rerun_under_xvfb() {
     let exe = std::env::current_exe().expect("own path");
     eprintln!("no display: running the window test under xvfb-run -a");
-    match Command::new("xvfb-run").arg("-a").arg(&exe).env(INNER, "1").status() {
+    let run = test_skips::run_id().to_string();
+    match Command::new("xvfb-run")
+        .arg("-a")
+        .arg(&exe)
+        .env(INNER, "1")
+        .env(test_skips::RUN_VARIABLE, run)
+        .status()
+    {
         Ok(status) => assert!(status.success(), "the window test failed under xvfb-run: {status}"),
         Err(error) => {
             let reason = format!("cannot run xvfb-run ({error}); install xvfb and xauth");
             assert!(!under_ci(), "CI=true, so this cannot be skipped: {reason}");
-            eprintln!("\n==== SKIPPED window test: {reason} ====\n");
+            test_skips::skip("terrain window test", &reason);
         }
     }
 }
@@ -77,7 +84,7 @@ fn have_xdotool() -> bool {
     if !found {
         let reason = "xdotool is not installed, so keyboard and mouse input is not tested";
         assert!(!under_ci(), "CI=true, so this cannot be skipped: {reason}");
-        eprintln!("\n==== SKIPPED part of the window test: {reason} ====\n");
+        test_skips::skip("terrain window test (input)", reason);
     }
     found
 }
@@ -136,7 +143,7 @@ fn opens_draws_and_closes() {
         Err(window::WindowError::Render(error))
             if !under_ci() && error.to_string().contains("no graphics adapter") =>
         {
-            eprintln!("\n==== SKIPPED window test: {error} ====\n");
+            test_skips::skip("terrain window test", &error.to_string());
         }
         Err(error) => panic!("the window failed: {error}"),
     }

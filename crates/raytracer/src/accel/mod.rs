@@ -1,5 +1,6 @@
-//! Acceleration structures: a bounding-volume hierarchy over the bounded shapes.
+//! Acceleration structures: a 4-wide bounding-volume hierarchy over the scene's primitives and,
+//! inside every triangle mesh, over its triangles.
 
-mod bvh;
+pub mod wide;
 
-pub use bvh::Bvh;
+pub use wide::{Box32, BoxRay, BuildParams, WideBvh};

@@ -40,8 +40,14 @@ impl Cylinder {
         }
         let along = top - base;
         let height = along.length();
-        if !height.is_finite() || height <= 0.0 {
+        if along == DVec3::ZERO {
             return Err(GeometryError::ZeroAxis);
+        }
+        if !height.is_finite() {
+            return Err(GeometryError::AxisTooLong);
+        }
+        if height == 0.0 {
+            return Err(GeometryError::AxisTooShort);
         }
         let axis = along / height;
         let seam = course_perpendicular(axis);
@@ -112,12 +118,12 @@ impl Cylinder {
     #[inline]
     pub fn outward_normal(&self, point: DVec3, part: ShapePart) -> DVec3 {
         match part {
-            ShapePart::Main => {
+            ShapePart::BottomCap => -self.axis,
+            ShapePart::TopCap => self.axis,
+            _ => {
                 let p = point - self.base;
                 (p - self.axis * p.dot(self.axis)).normalize()
             }
-            ShapePart::BottomCap => -self.axis,
-            ShapePart::TopCap => self.axis,
         }
     }
 
@@ -128,7 +134,7 @@ impl Cylinder {
     pub fn texture_coordinates(&self, point: DVec3, part: ShapePart) -> (f64, f64) {
         let p = point - self.base;
         match part {
-            ShapePart::Main => {
+            ShapePart::Main | ShapePart::Triangle { .. } | ShapePart::Profile { .. } => {
                 let h = p.dot(self.axis);
                 let angle = p.dot(self.seam2).atan2(p.dot(self.seam)).rem_euclid(TAU);
                 (h / self.height, angle / TAU)
@@ -262,7 +268,7 @@ mod tests {
             let base = DVec3::new(scale, -scale, 0.5 * scale);
             for dir in [DVec3::Z, DVec3::new(1.0, 2.0, 0.5).normalize()] {
                 let c = Cylinder::new(base, base + dir * 2.0 * scale, 0.6 * scale).expect("valid");
-                check_reintersection(&Shape::Cylinder(c), base + dir * scale, scale, &mut rng);
+                check_reintersection(&Shape::Cylinder(Box::new(c)), base + dir * scale, scale, &mut rng);
             }
         }
     }

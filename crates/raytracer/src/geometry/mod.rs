@@ -1,29 +1,42 @@
 //! Rays and the closed set of shapes the scene language can describe.
 //!
 //! Conventions: the world is **z-up** and right-handed; distances are unitless (scenes use sizes of
-//! about 0.1 to 10, but walls are often spheres of radius 1e5), so everything is computed in `f64`.
-//! A shape reports hits as a ray parameter `t` plus the [`ShapePart`] that was hit; the surface
-//! frame (point, outward normal) and texture coordinates are computed afterwards, for the nearest
-//! hit only.
+//! about 0.1 to 10, but walls are often spheres of radius 1e5), so the analytic shapes are
+//! computed in `f64`. Triangle meshes keep their vertices in `f32` (as Embree does) with a
+//! watertight test and recompute the hit point in `f64`.
+//! A shape reports hits as a ray parameter `t` plus the [`ShapePart`] that was hit (with the
+//! triangle and its barycentric weights, or the curve parameter, that the intersection found);
+//! the surface frame (point, normals) and texture coordinates are computed afterwards, for the
+//! nearest hit only.
 
+pub mod bezier;
 mod bounds;
 mod cylinder;
+pub mod mesh;
+pub mod obj;
 mod plane;
 mod ray;
 mod sphere;
 mod square;
+pub mod triangle;
 
+pub use bezier::Bezier;
 pub use bounds::Bounds;
 pub use cylinder::Cylinder;
+pub use mesh::{MESH_ERROR_SCALE, MeshVertices, TriangleIndices, TriangleMesh};
+pub use obj::{MeshFile, MeshTransform};
 pub use plane::Plane;
-pub use ray::{Ray, offset_origin};
+pub use ray::{Ray, SPAWN_OFFSET, offset_origin};
 pub use sphere::Sphere;
 pub use square::Square;
+pub use triangle::Triangle;
+
+use std::sync::Arc;
 
 use glam::DVec3;
 
-/// Which part of a shape a ray hit; only cylinders have more than one.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Which part of a shape a ray hit, with what the intersection found there.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ShapePart {
     /// The only surface of a sphere, plane or square, or the curved side of a cylinder.
     Main,
@@ -31,6 +44,21 @@ pub enum ShapePart {
     BottomCap,
     /// The cap disc of a cylinder at `O2` (normal `+axis`).
     TopCap,
+    /// A triangle (of a mesh, or a single triangle with `index` 0) at the barycentric weights
+    /// `b1`, `b2` of its second and third corners.
+    Triangle {
+        /// The triangle's index in its mesh.
+        index: u32,
+        /// Weight of the second corner.
+        b1: f32,
+        /// Weight of the third corner.
+        b2: f32,
+    },
+    /// A Bezier surface of revolution at curve parameter `s` in [0, 1].
+    Profile {
+        /// The curve parameter.
+        s: f64,
+    },
 }
 
 /// A hit of a ray on a shape: the ray parameter and the part hit.
@@ -43,7 +71,8 @@ pub struct ShapeHit {
     pub part: ShapePart,
 }
 
-/// The closed set of geometric shapes (pbrt's tagged union, as a Rust enum).
+/// The closed set of geometric shapes (pbrt's tagged union, as a Rust enum). The larger shapes
+/// are boxed so that a scene of many small ones (spheres) stays compact.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     /// A sphere (`primitive sphere`).
@@ -51,9 +80,18 @@ pub enum Shape {
     /// An infinite plane (`primitive plane`).
     Plane(Plane),
     /// A parallelogram (`primitive square`).
-    Square(Square),
+    Square(Box<Square>),
     /// A closed cylinder with both caps (`primitive cylinder`).
-    Cylinder(Cylinder),
+    Cylinder(Box<Cylinder>),
+    /// A single triangle (`primitive triangle`).
+    Triangle(Box<Triangle>),
+    /// A Bezier surface of revolution (`primitive bezier`).
+    Bezier(Box<Bezier>),
+    /// A triangle mesh, loaded (the triangles of one material of a mesh file).
+    Mesh(Arc<TriangleMesh>),
+    /// A mesh file as the scene names it (`primitive mesh`, `primitive polyhedron`), before
+    /// [`crate::PreparedScene`] loads it: it has no surface until then.
+    MeshFile(Box<MeshFile>),
 }
 
 impl Shape {
@@ -65,6 +103,38 @@ impl Shape {
             Shape::Plane(s) => s.intersect(ray, t_min, t_max),
             Shape::Square(s) => s.intersect(ray, t_min, t_max),
             Shape::Cylinder(s) => s.intersect(ray, t_min, t_max),
+            Shape::Triangle(s) => s.intersect(ray, t_min, t_max),
+            Shape::Bezier(s) => s.intersect(ray, t_min, t_max),
+            // Meshes start their rays at the origin (every caller's `t_min` is 0; a mesh hit is
+            // only trusted beyond its rounding error anyway).
+            Shape::Mesh(m) => m.intersect(ray, t_max),
+            Shape::MeshFile(_) => None,
+        }
+    }
+
+    /// Whether the shape lies on the ray with `0 < t < t_max` (for shadow rays; faster than
+    /// [`Shape::intersect`] for meshes).
+    #[inline]
+    pub fn occludes(&self, ray: &Ray, t_max: f64) -> bool {
+        match self {
+            Shape::Mesh(m) => m.occluded(ray, t_max),
+            _ => self.intersect(ray, 0.0, t_max).is_some(),
+        }
+    }
+
+    /// The hit point: `ray.at(t)`, except on a triangle, where it is recomputed from the
+    /// barycentric weights in double precision so that it lies on the triangle's plane.
+    #[inline]
+    pub fn hit_point(&self, ray: &Ray, hit: &ShapeHit) -> DVec3 {
+        match (self, hit.part) {
+            (Shape::Mesh(m), ShapePart::Triangle { index, b1, b2 }) => m.point_at(index, b1, b2),
+            (Shape::Triangle(t), ShapePart::Triangle { b1, b2, .. }) => {
+                // The single-precision weights are a start; the plane is exact in double precision.
+                let p = t.point_at(b1 as f64, b2 as f64);
+                let q = ray.at(hit.t);
+                q - t.normal * (q - p).dot(t.normal)
+            }
+            _ => ray.at(hit.t),
         }
     }
 
@@ -77,6 +147,59 @@ impl Shape {
             Shape::Plane(s) => s.normal,
             Shape::Square(s) => s.normal,
             Shape::Cylinder(s) => s.outward_normal(point, part),
+            Shape::Triangle(s) => s.normal,
+            Shape::Bezier(s) => match part {
+                ShapePart::Profile { s: at } => s.outward_normal(point, at),
+                _ => s.axis,
+            },
+            Shape::Mesh(m) => match part {
+                ShapePart::Triangle { index, .. } => m.face_normal(index),
+                _ => DVec3::Z,
+            },
+            Shape::MeshFile(_) => DVec3::Z,
+        }
+    }
+
+    /// The unit normal to shade with, on the outward side: the interpolated vertex normal of a
+    /// smooth mesh, `None` where it equals the outward normal (every other shape).
+    #[inline]
+    pub fn shading_normal(&self, part: ShapePart) -> Option<DVec3> {
+        match (self, part) {
+            (Shape::Mesh(m), ShapePart::Triangle { index, b1, b2 }) => m.shading_normal(index, b1, b2),
+            _ => None,
+        }
+    }
+
+    /// The directions in which the texture coordinates `u` and `v` grow at `point` (not unit
+    /// vectors; for tangent-space normal maps).
+    pub fn texture_tangents(&self, point: DVec3, part: ShapePart) -> (DVec3, DVec3) {
+        match self {
+            Shape::Sphere(s) => {
+                // u runs from the -pole to the +pole, v around the pole.
+                let i = (point - s.centre).normalize_or(s.pole);
+                let around = s.pole.cross(i);
+                let up = i.cross(around);
+                (up, around)
+            }
+            Shape::Plane(p) => match p.texture_axes {
+                Some((u, v)) => (u, v),
+                None => any_tangents(p.normal),
+            },
+            Shape::Square(s) => (s.dx, s.dy),
+            Shape::Cylinder(c) => match part {
+                ShapePart::Main => (c.axis, c.axis.cross(c.outward_normal(point, part))),
+                _ => any_tangents(c.axis),
+            },
+            Shape::Triangle(t) => t.texture_tangents(),
+            Shape::Bezier(b) => match part {
+                ShapePart::Profile { s } => b.texture_tangents(point, s),
+                _ => any_tangents(b.axis),
+            },
+            Shape::Mesh(m) => match part {
+                ShapePart::Triangle { index, .. } => m.texture_tangents(index),
+                _ => any_tangents(DVec3::Z),
+            },
+            Shape::MeshFile(_) => any_tangents(DVec3::Z),
         }
     }
 
@@ -88,6 +211,19 @@ impl Shape {
             Shape::Plane(s) => s.texture_coordinates(point),
             Shape::Square(s) => s.texture_coordinates(point),
             Shape::Cylinder(s) => s.texture_coordinates(point, part),
+            Shape::Triangle(s) => match part {
+                ShapePart::Triangle { b1, b2, .. } => (b1 as f64, b2 as f64),
+                _ => s.texture_coordinates(point),
+            },
+            Shape::Bezier(s) => match part {
+                ShapePart::Profile { s: at } => s.texture_coordinates(point, at),
+                _ => (0.0, 0.0),
+            },
+            Shape::Mesh(m) => match part {
+                ShapePart::Triangle { index, b1, b2 } => m.texture_coordinates(index, b1, b2),
+                _ => (0.0, 0.0),
+            },
+            Shape::MeshFile(_) => (0.0, 0.0),
         }
     }
 
@@ -98,6 +234,10 @@ impl Shape {
             Shape::Plane(_) => None,
             Shape::Square(s) => Some(s.bounds()),
             Shape::Cylinder(s) => Some(s.bounds()),
+            Shape::Triangle(s) => Some(s.bounds()),
+            Shape::Bezier(s) => Some(s.bounds()),
+            Shape::Mesh(m) => (!m.is_empty()).then(|| m.bounds()),
+            Shape::MeshFile(_) => None,
         }
     }
 
@@ -109,8 +249,19 @@ impl Shape {
             Shape::Plane(s) => s.offset.abs(),
             Shape::Square(s) => s.centre.abs().max_element() + s.dx.length() + s.dy.length(),
             Shape::Cylinder(s) => s.base.abs().max_element().max(s.top.abs().max_element()) + s.radius,
+            Shape::Triangle(s) => s.corners.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max),
+            Shape::Bezier(s) => s.magnitude(),
+            // Single-precision vertices: rounding errors are larger (see `MESH_ERROR_SCALE`).
+            Shape::Mesh(m) => m.magnitude() * MESH_ERROR_SCALE,
+            Shape::MeshFile(_) => 0.0,
         }
     }
+}
+
+/// Two directions perpendicular to `n` (tangents for a surface without texture axes).
+fn any_tangents(n: DVec3) -> (DVec3, DVec3) {
+    let a = n.any_orthonormal_vector();
+    (a, n.cross(a))
 }
 
 /// Solves `a t^2 + 2 b t + c = 0` (note the halved linear coefficient) for its two real roots in
@@ -184,7 +335,7 @@ pub(crate) mod test_util {
                 continue;
             };
             hits += 1;
-            let point = ray.at(hit.t);
+            let point = shape.hit_point(&ray, &hit);
             let outward = shape.outward_normal(point, hit.part);
             let facing = if ray.dir.dot(outward) < 0.0 { outward } else { -outward };
             let magnitude = shape.magnitude().max(point.abs().max_element());

@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{Ray, ShapeHit, ShapePart};
-use crate::error::GeometryError;
+use crate::error::{GeometryError, unit_direction, usable_length_squared};
 
 /// The plane `{P : P . normal = offset}` with optional world-anchored texture axes.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,15 +20,15 @@ pub struct Plane {
 impl Plane {
     /// A plane with normal `normal` (any length but zero) at signed distance `offset`.
     pub fn new(normal: DVec3, offset: f64) -> Result<Plane, GeometryError> {
-        let normal = normal.try_normalize().ok_or(GeometryError::ZeroVector("N"))?;
+        let normal = unit_direction(normal, "N")?;
         Ok(Plane { normal, offset, texture_axes: None })
     }
 
     /// Sets the texture axes `Dx=`, `Dy=`: their lengths are the world size of one tile.
     pub fn with_texture_axes(mut self, dx: DVec3, dy: DVec3) -> Result<Plane, GeometryError> {
         let inv = |v: DVec3, name| {
-            let l2 = v.length_squared();
-            if l2 > 0.0 && l2.is_finite() { Ok(v / l2) } else { Err(GeometryError::ZeroVector(name)) }
+            let inverse = v / usable_length_squared(v, name)?;
+            if inverse.is_finite() { Ok(inverse) } else { Err(GeometryError::TooSmall(name)) }
         };
         self.texture_axes = Some((inv(dx, "Dx")?, inv(dy, "Dy")?));
         Ok(self)

@@ -5,7 +5,7 @@ use std::f64::consts::{PI, TAU};
 use glam::DVec3;
 
 use super::{Bounds, Ray, ShapeHit, ShapePart, order};
-use crate::error::GeometryError;
+use crate::error::{GeometryError, unit_direction};
 
 /// A sphere with a texture frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,7 +35,8 @@ impl Sphere {
         if !radius.is_finite() || radius <= 0.0 {
             return Err(GeometryError::NonPositiveRadius(radius));
         }
-        let pole = pole.try_normalize().ok_or(GeometryError::ZeroVector("De"))?;
+        let pole = unit_direction(pole, "De")?;
+        let seam = unit_direction(seam, "Dc")?;
         let seam =
             (seam - seam.dot(pole) * pole).try_normalize().ok_or(GeometryError::ParallelAxes("Dc", "De"))?;
         Ok(Sphere { centre, radius, pole, seam })

@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{Bounds, Ray, ShapeHit, ShapePart};
-use crate::error::GeometryError;
+use crate::error::{GeometryError, usable_length_squared};
 
 /// The parallelogram `centre + a * dx + b * dy` for `a, b` in `[-1, 1]`.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,15 +24,17 @@ pub struct Square {
 impl Square {
     /// The parallelogram with centre `centre` and half axes `dx`, `dy` (not parallel, not zero).
     pub fn new(centre: DVec3, dx: DVec3, dy: DVec3) -> Result<Square, GeometryError> {
-        if dx.length_squared() == 0.0 {
-            return Err(GeometryError::ZeroVector("Dx"));
-        }
-        if dy.length_squared() == 0.0 {
-            return Err(GeometryError::ZeroVector("Dy"));
-        }
+        usable_length_squared(dx, "Dx")?;
+        usable_length_squared(dy, "Dy")?;
         let cross = dx.cross(dy);
         let area = cross.length();
-        if area.is_nan() || area <= 1e-12 * dx.length() * dy.length() {
+        if !area.is_finite() {
+            return Err(GeometryError::TooLarge("Dx"));
+        }
+        if area == 0.0 && dx.normalize().cross(dy.normalize()).length() > 1e-12 {
+            return Err(GeometryError::TooSmall("Dx"));
+        }
+        if area <= 1e-12 * dx.length() * dy.length() {
             return Err(GeometryError::ParallelAxes("Dx", "Dy"));
         }
         let normal = cross / area;
@@ -154,7 +156,7 @@ mod tests {
             let c = DVec3::new(scale, 2.0 * scale, -scale);
             let dx = DVec3::new(1.0, 0.2, 0.0) * scale;
             let dy = DVec3::new(0.0, 0.3, 1.0) * scale;
-            let shape = Shape::Square(Square::new(c, dx, dy).expect("valid"));
+            let shape = Shape::Square(Box::new(Square::new(c, dx, dy).expect("valid")));
             check_reintersection(&shape, c, scale, &mut rng);
         }
     }

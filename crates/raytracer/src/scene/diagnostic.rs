@@ -69,6 +69,115 @@ impl Diagnostic {
 
 /// Tab stops used when echoing a line.
 const TAB_WIDTH: usize = 4;
+/// Widest excerpt echoed, in columns: a longer line is cut around the marked text, with `...`
+/// where text is left out.
+const MAX_EXCERPT_WIDTH: usize = 100;
+/// Columns of context kept before the marked text when a long line is cut.
+const CONTEXT_BEFORE: usize = 32;
+
+/// Whether a character is shown escaped: control characters (NUL, escape sequences...) and the
+/// bidirectional formatting characters, which could make the echoed text read differently from
+/// the file (U+202E turns the rest of the line around).
+fn needs_escape(ch: char) -> bool {
+    ch.is_control()
+        || matches!(ch, '\u{061C}' | '\u{200E}' | '\u{200F}' | '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}')
+}
+
+/// Text from a scene file (or its name) made safe to print: control and bidirectional characters
+/// are shown as escapes such as `\u{202e}`; newlines and tabs of the message itself stay.
+pub(crate) fn escape_for_terminal(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(|c| needs_escape(c) && c != '\n' && c != '\t') {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for ch in text.chars() {
+        if needs_escape(ch) && ch != '\n' && ch != '\t' {
+            out.extend(ch.escape_unicode());
+        } else {
+            out.push(ch);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// How character `ch` of a line is echoed when it starts at display column `at` (0-based): tabs
+/// become spaces up to the next tab stop, control and bidirectional characters escapes.
+fn echo_piece(ch: char, at: usize, out: &mut String) {
+    if ch == '\t' {
+        out.extend(std::iter::repeat_n(' ', TAB_WIDTH - at % TAB_WIDTH));
+    } else if needs_escape(ch) {
+        out.extend(ch.escape_unicode());
+    } else {
+        out.push(ch);
+    }
+}
+
+/// The width in columns of [`echo_piece`]'s output.
+fn piece_width(ch: char, at: usize) -> usize {
+    if ch == '\t' {
+        TAB_WIDTH - at % TAB_WIDTH
+    } else if needs_escape(ch) {
+        ch.escape_unicode().count()
+    } else {
+        1
+    }
+}
+
+/// The echoed line and the caret line's offset and width, for `span`'s columns (1-based,
+/// counted in characters) of `line`. Linear in the line's length, and at most about
+/// [`MAX_EXCERPT_WIDTH`] columns wide whatever the line's length.
+fn excerpt(line: &str, column: u32, len: u32) -> (String, usize, usize) {
+    let first = column as usize;
+    let last = first + len.max(1) as usize; // one past the last marked character
+    // Pass 1: the display columns of the marked text and of the whole line.
+    let (mut caret_start, mut caret_end, mut width) = (None, None, 0usize);
+    for (i, ch) in line.chars().enumerate() {
+        let col = i + 1;
+        if col == first {
+            caret_start = Some(width);
+        }
+        width += piece_width(ch, width);
+        if col >= first && col < last {
+            caret_end = Some(width);
+        }
+    }
+    let caret_start = caret_start.unwrap_or(width);
+    let caret_end = caret_end.unwrap_or(caret_start + 1).max(caret_start + 1);
+    // The window of display columns to show.
+    let (lo, hi) = if width <= MAX_EXCERPT_WIDTH {
+        (0, width)
+    } else {
+        let lo = caret_start.saturating_sub(CONTEXT_BEFORE).min(width.saturating_sub(MAX_EXCERPT_WIDTH));
+        (lo, (lo + MAX_EXCERPT_WIDTH).min(width))
+    };
+    // Pass 2: the characters wholly inside the window.
+    let mut echoed = String::new();
+    if lo > 0 {
+        echoed.push_str("...");
+    }
+    let (mut shown_from, mut shown_to, mut at) = (None, lo, 0usize);
+    for ch in line.chars() {
+        let w = piece_width(ch, at);
+        if at >= hi {
+            break;
+        }
+        if at >= lo && at + w <= hi {
+            shown_from.get_or_insert(at);
+            echo_piece(ch, at, &mut echoed);
+            shown_to = at + w;
+        }
+        at += w;
+    }
+    let shown_from = shown_from.unwrap_or(lo);
+    if shown_to < width {
+        echoed.push_str("...");
+    }
+    let prefix = if lo > 0 { 3 } else { 0 };
+    let offset = prefix + caret_start.clamp(shown_from, shown_to.max(shown_from)) - shown_from;
+    let visible_end = if caret_start >= width { caret_end } else { caret_end.min(shown_to) };
+    let caret_width = visible_end.saturating_sub(caret_start.max(shown_from)).max(1);
+    (echoed, offset, caret_width)
+}
 
 impl fmt::Display for Diagnostic {
     /// Renders the diagnostic in the style of compiler messages:
@@ -81,44 +190,27 @@ impl fmt::Display for Diagnostic {
     ///    |        ^^^
     ///    = note: ...
     /// ```
+    ///
+    /// Control and bidirectional characters are shown escaped; a line wider than 100 columns is
+    /// cut around the marked text.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "{}: {}", self.severity, self.message)?;
+        writeln!(f, "{}: {}", self.severity, escape_for_terminal(&self.message))?;
         let gutter = match &self.location {
             Some(loc) => {
                 let number = loc.span.line.to_string();
                 let pad = " ".repeat(number.len());
-                writeln!(f, "{pad}--> {}:{}:{}", loc.file, loc.span.line, loc.span.column)?;
+                let file = escape_for_terminal(&loc.file);
+                writeln!(f, "{pad}--> {file}:{}:{}", loc.span.line, loc.span.column)?;
                 writeln!(f, "{pad} |")?;
-                // Expand tabs so the caret lines up with the echoed text.
-                let mut echoed = String::new();
-                let (mut caret_start, mut caret_len) = (None, 0);
-                for (i, ch) in loc.line_text.chars().enumerate() {
-                    let col = i as u32 + 1;
-                    let start = echoed.chars().count();
-                    if ch == '\t' {
-                        echoed.push_str(&" ".repeat(TAB_WIDTH - start % TAB_WIDTH));
-                    } else if ch.is_control() {
-                        echoed.push(' ');
-                    } else {
-                        echoed.push(ch);
-                    }
-                    let width = echoed.chars().count() - start;
-                    if col == loc.span.column {
-                        caret_start = Some(start);
-                    }
-                    if col >= loc.span.column && col < loc.span.column + loc.span.len.max(1) {
-                        caret_len += width;
-                    }
-                }
-                let caret_start = caret_start.unwrap_or(echoed.chars().count());
+                let (echoed, caret_start, caret_len) = excerpt(&loc.line_text, loc.span.column, loc.span.len);
                 writeln!(f, "{number} | {}", echoed.trim_end())?;
-                writeln!(f, "{pad} | {}{}", " ".repeat(caret_start), "^".repeat(caret_len.max(1)))?;
+                writeln!(f, "{pad} | {}{}", " ".repeat(caret_start), "^".repeat(caret_len))?;
                 pad
             }
             None => String::new(),
         };
         for note in &self.notes {
-            writeln!(f, "{gutter} = note: {note}")?;
+            writeln!(f, "{gutter} = note: {}", escape_for_terminal(note))?;
         }
         Ok(())
     }
@@ -154,6 +246,47 @@ mod tests {
     fn tabs_are_expanded_consistently() {
         let text = at("\tR= x", 5, 1).to_string();
         assert!(text.contains("7 |     R= x\n  |        ^\n"), "{text}");
+    }
+
+    #[test]
+    fn control_and_bidi_characters_are_escaped() {
+        let mut d = at("O= a\u{202e}b\0", 4, 2);
+        d.message = "bad `a\u{202e}b`".into();
+        let text = d.to_string();
+        assert!(!text.contains('\u{202e}') && !text.contains('\0'), "{text:?}");
+        assert!(text.starts_with("error: bad `a\\u{202e}b`\n"), "{text}");
+        // The caret still sits under the marked text, the escape counting as its printed width.
+        assert!(text.contains("7 | O= a\\u{202e}b\\u{0}\n  |    ^^^^^^^^^\n"), "{text}");
+    }
+
+    #[test]
+    fn long_lines_are_cut_around_the_span() {
+        let mut line = "O= ".to_owned();
+        line.push_str(&"1 ".repeat(5000));
+        line.push('x');
+        line.push_str(&" 2".repeat(5000));
+        let column = 3 + 10_000 + 1;
+        let text = at(&line, column as u32, 1).to_string();
+        let echoed = text.lines().nth(3).expect("excerpt");
+        let caret = text.lines().nth(4).expect("caret");
+        assert!(echoed.len() < 120, "{echoed}");
+        assert!(echoed.starts_with("7 | ...") && echoed.ends_with("..."), "{echoed}");
+        let x = echoed.find('x').expect("the marked text is shown");
+        assert_eq!(caret.find('^'), Some(x), "{echoed}\n{caret}");
+        // A marked text longer than the window is cut too, and its caret with it.
+        let text = at(&line, 4, 30_000).to_string();
+        assert!(text.lines().all(|l| l.len() < 120), "{text}");
+    }
+
+    #[test]
+    fn huge_lines_are_reported_in_linear_time() {
+        // A million characters: counting the columns again for every character (the old code)
+        // took minutes; one pass takes milliseconds.
+        let line = "1 ".repeat(500_000);
+        let started = std::time::Instant::now();
+        let text = at(&line, 999_999, 1).to_string();
+        assert!(text.len() < 400, "{text}");
+        assert!(started.elapsed() < std::time::Duration::from_secs(10), "{:?}", started.elapsed());
     }
 
     #[test]

@@ -9,10 +9,13 @@ mod source;
 
 pub use diagnostic::{Diagnostic, Location, Severity};
 pub use parser::{
-    MAX_EMITTED_PHOTONS, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_QUALITY, MAX_SAMPLE_PHOTONS,
-    MAX_STORED_PHOTONS, Parsed, SceneError, aspect_mismatch, check_image_size, parse,
+    MAX_EMITTED_PHOTONS, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_KEPT_DIAGNOSTICS, MAX_QUALITY,
+    MAX_SAMPLE_PHOTONS, MAX_STORED_PHOTONS, Omitted, Parsed, SceneError, aspect_mismatch, check_image_size,
+    parse,
 };
-pub use source::{ReadError, SourceFile, Span};
+pub use source::{MAX_SCENE_FILE_BYTES, ReadError, SourceFile, Span};
+
+use std::sync::Arc;
 
 use glam::DVec3;
 
@@ -224,6 +227,7 @@ impl Default for PhotonSettings {
 pub struct Primitive {
     /// The geometry.
     pub shape: Shape,
-    /// The surface.
-    pub material: Material,
+    /// The surface, shared by every primitive with the same material (the parser shares equal
+    /// untextured materials; a mesh's triangles all share their mesh's).
+    pub material: Arc<Material>,
 }

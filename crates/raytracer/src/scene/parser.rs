@@ -8,14 +8,15 @@
 
 use std::collections::HashMap;
 use std::fmt;
+use std::sync::Arc;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use super::diagnostic::{Diagnostic, Severity};
 use super::source::{SourceFile, Span};
 use super::{Algorithm, Background, CameraSettings, Gradient, PhotonSettings, Primitive, Scene};
 use crate::error::GeometryError;
-use crate::geometry::{Cylinder, Plane, Shape, Sphere, Square};
+use crate::geometry::{Bezier, Cylinder, MeshFile, MeshTransform, Plane, Shape, Sphere, Square, Triangle};
 use crate::light::Light;
 use crate::material::Material;
 use crate::texture::{BUILTIN_PREFIX, Builtin, TextureRef, TextureSource};
@@ -36,27 +37,44 @@ pub const MAX_SAMPLE_PHOTONS: u64 = 100_000;
 /// Largest `iterations=`.
 pub const MAX_ITERATIONS: u64 = 1_000_000;
 
+/// Most errors, and most warnings and notes, kept from one file: a hostile file can hold
+/// millions of mistakes, and nobody reads past the first few. The rest are only counted.
+pub const MAX_KEPT_DIAGNOSTICS: usize = 50;
+
+/// Diagnostics counted but not kept, beyond [`MAX_KEPT_DIAGNOSTICS`] of their kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Omitted {
+    /// Errors not kept.
+    pub errors: usize,
+    /// Warnings and notes not kept.
+    pub others: usize,
+}
+
 /// A successfully parsed scene with the warnings and notes found on the way.
 #[derive(Clone, Debug)]
 pub struct Parsed {
     /// The scene.
     pub scene: Scene,
-    /// Warnings and notes, in file order.
+    /// Warnings and notes, in file order (the first [`MAX_KEPT_DIAGNOSTICS`]).
     pub diagnostics: Vec<Diagnostic>,
+    /// Warnings and notes past those kept.
+    pub omitted: Omitted,
 }
 
-/// A scene file with at least one error. Holds every diagnostic (errors and warnings) in file
-/// order.
+/// A scene file with at least one error. Holds the diagnostics (errors and warnings) in file
+/// order, at most [`MAX_KEPT_DIAGNOSTICS`] errors and as many others, and counts the rest.
 #[derive(Clone, Debug, thiserror::Error)]
 pub struct SceneError {
-    /// All diagnostics, errors first in importance but listed in file order.
+    /// The diagnostics kept, in file order.
     pub diagnostics: Vec<Diagnostic>,
+    /// Diagnostics past those kept.
+    pub omitted: Omitted,
 }
 
 impl SceneError {
-    /// The number of errors.
+    /// The number of errors, kept or not.
     pub fn error_count(&self) -> usize {
-        self.diagnostics.iter().filter(|d| d.is_error()).count()
+        self.diagnostics.iter().filter(|d| d.is_error()).count() + self.omitted.errors
     }
 }
 
@@ -64,6 +82,10 @@ impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for d in &self.diagnostics {
             writeln!(f, "{d}")?;
+        }
+        let more = self.omitted.errors + self.omitted.others;
+        if more > 0 {
+            writeln!(f, "... and {more} more")?;
         }
         let n = self.error_count();
         write!(f, "{n} error{}", if n == 1 { "" } else { "s" })
@@ -73,16 +95,29 @@ impl fmt::Display for SceneError {
 /// Parses a scene file. Returns the scene and its warnings, or every diagnostic when there is an
 /// error. Never panics, whatever the input.
 pub fn parse(source: &SourceFile) -> Result<Parsed, SceneError> {
-    let mut parser = Parser { source, diagnostics: Vec::new(), scene: Scene::empty(), seen: Seen::default() };
+    let mut parser = Parser {
+        source,
+        diagnostics: Vec::new(),
+        kept: Omitted::default(),
+        omitted: Omitted::default(),
+        scratch: Diagnostic::general(Severity::Note, ""),
+        scene: Scene::empty(),
+        seen: Seen::default(),
+        materials: HashMap::new(),
+    };
     parser.run();
-    let Parser { mut diagnostics, scene, .. } = parser;
+    let Parser { mut diagnostics, omitted, scene, .. } = parser;
     // File order; diagnostics about the whole file last.
     diagnostics.sort_by_key(|d| d.location.as_ref().map_or((u32::MAX, 0), |l| (l.span.line, l.span.column)));
-    if diagnostics.iter().any(Diagnostic::is_error) {
-        Err(SceneError { diagnostics })
+    if parser_has_errors(&diagnostics, omitted) {
+        Err(SceneError { diagnostics, omitted })
     } else {
-        Ok(Parsed { scene, diagnostics })
+        Ok(Parsed { scene, diagnostics, omitted })
     }
+}
+
+fn parser_has_errors(diagnostics: &[Diagnostic], omitted: Omitted) -> bool {
+    omitted.errors > 0 || diagnostics.iter().any(Diagnostic::is_error)
 }
 
 impl Scene {
@@ -113,9 +148,9 @@ impl Token<'_> {
     }
 }
 
-/// Splits a line into tokens, dropping the comment (from the first `#` or `//`).
-fn tokenize(line: &str) -> Vec<Token<'_>> {
-    let mut tokens = Vec::new();
+/// Splits a line into `tokens` (cleared first), dropping the comment (from the first `#` or `//`).
+fn tokenize<'a>(line: &'a str, tokens: &mut Vec<Token<'a>>) {
+    tokens.clear();
     let mut start: Option<(usize, u32)> = None;
     let mut column = 0u32;
     let mut chars = line.char_indices().peekable();
@@ -139,7 +174,6 @@ fn tokenize(line: &str) -> Vec<Token<'_>> {
         let text = &line[s..end_of_code];
         tokens.push(Token { text, column: c, len: text.chars().count() as u32 });
     }
-    tokens
 }
 
 /// The kinds of block.
@@ -164,6 +198,42 @@ enum PrimitiveKind {
     Plane,
     Square,
     Cylinder,
+    Triangle,
+    /// `primitive mesh` (`file=`, `scale=`, `rotation=` in radians).
+    Mesh,
+    /// `primitive polyhedron` (`mesh=`, `size=`, `angles=` in degrees).
+    Polyhedron,
+    Bezier,
+}
+
+impl PrimitiveKind {
+    /// The kind a `primitive` (or `obj`) header names.
+    fn from_name(name: &str) -> Option<PrimitiveKind> {
+        Some(match name {
+            "sphere" => PrimitiveKind::Sphere,
+            "plane" => PrimitiveKind::Plane,
+            "square" => PrimitiveKind::Square,
+            "cylinder" => PrimitiveKind::Cylinder,
+            "triangle" => PrimitiveKind::Triangle,
+            "mesh" => PrimitiveKind::Mesh,
+            "polyhedron" => PrimitiveKind::Polyhedron,
+            "bezier" => PrimitiveKind::Bezier,
+            _ => return None,
+        })
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            PrimitiveKind::Sphere => "sphere",
+            PrimitiveKind::Plane => "plane",
+            PrimitiveKind::Square => "square",
+            PrimitiveKind::Cylinder => "cylinder",
+            PrimitiveKind::Triangle => "triangle",
+            PrimitiveKind::Mesh => "mesh",
+            PrimitiveKind::Polyhedron => "polyhedron",
+            PrimitiveKind::Bezier => "bezier",
+        }
+    }
 }
 
 impl fmt::Display for BlockKind {
@@ -174,53 +244,104 @@ impl fmt::Display for BlockKind {
             BlockKind::Light(LightKind::Point) => "light point",
             BlockKind::Light(LightKind::Square) => "light square",
             BlockKind::Light(LightKind::Sphere) => "light sphere",
-            BlockKind::Primitive(PrimitiveKind::Sphere) => "primitive sphere",
-            BlockKind::Primitive(PrimitiveKind::Plane) => "primitive plane",
-            BlockKind::Primitive(PrimitiveKind::Square) => "primitive square",
-            BlockKind::Primitive(PrimitiveKind::Cylinder) => "primitive cylinder",
+            BlockKind::Primitive(kind) => return write!(f, "primitive {}", kind.name()),
         })
     }
 }
 
 /// Keys every primitive accepts (material keys).
-const MATERIAL_KEYS: [&str; 10] =
-    ["color", "texture", "diff", "spec", "refl", "drefl", "blur", "refr", "rindex", "absor"];
+const MATERIAL_KEYS: [&str; 12] =
+    ["color", "texture", "bump", "NT", "diff", "spec", "refl", "drefl", "blur", "refr", "rindex", "absor"];
 
-/// Primitive types of the same family that this version does not draw (spec section 9).
-const LATER_PRIMITIVES: [&str; 5] = ["triangle", "mesh", "polyhedron", "bezier", "obj"];
+/// The types of `primitive` blocks, as the error for a missing type lists them.
+const PRIMITIVE_TYPES: &str =
+    "`sphere`, `plane`, `square`, `cylinder`, `triangle`, `mesh`, `polyhedron` or `bezier`";
 
-/// One `key= values` line of a block.
+/// Primitive types that some students' renderers had and that their own parsers ignored too
+/// (spec section 9): skipped with a warning that says so.
+const IGNORED_PRIMITIVES: [&str; 2] = ["torus", "cube"];
+
+/// The key a `primitive bezier` block repeats, one control point a line (`P= z r`).
+const BEZIER_POINT_KEY: &str = "P";
+
+/// One `key= values` line of a block, borrowing the file's text.
 #[derive(Clone, Debug)]
-struct Entry {
-    key: String,
+struct Entry<'s> {
+    key: &'s str,
     key_span: Span,
-    /// The value tokens (the text after `=` when glued to the key counts as the first).
-    values: Vec<(String, Span)>,
+    /// The value tokens (the text after `=` when glued to the key counts as the first), at most
+    /// [`MAX_VALUES_KEPT`] of them.
+    values: Values<'s>,
+    /// How many values the line has, kept or not.
+    value_count: usize,
+    /// The span of all the values, or of the key when there are none.
+    all_values: Span,
 }
 
-impl Entry {
-    /// The span of all values, or of the key when there are none.
-    fn values_span(&self) -> Span {
-        match (self.values.first(), self.values.last()) {
-            (Some((_, first)), Some((_, last))) => {
-                Span { line: first.line, column: first.column, len: last.column + last.len - first.column }
+/// Most values kept from one key line: no key takes more than a few, and a hostile line may hold
+/// millions (the rest are counted, not kept).
+const MAX_VALUES_KEPT: usize = 16;
+
+/// The values of a key line: up to four inline (a scene of a million spheres allocates nothing
+/// per line), more on the heap.
+#[derive(Clone, Debug)]
+enum Values<'s> {
+    Inline([(&'s str, Span); 4], u8),
+    Heap(Vec<(&'s str, Span)>),
+}
+
+impl<'s> Values<'s> {
+    fn new() -> Values<'s> {
+        Values::Inline([("", Span { line: 0, column: 0, len: 0 }); 4], 0)
+    }
+
+    fn push(&mut self, v: (&'s str, Span)) {
+        match self {
+            Values::Inline(items, n) if (*n as usize) < items.len() => {
+                items[*n as usize] = v;
+                *n += 1;
             }
-            _ => self.key_span,
+            Values::Inline(items, _) => {
+                let mut heap = items.to_vec();
+                heap.push(v);
+                *self = Values::Heap(heap);
+            }
+            Values::Heap(h) => h.push(v),
         }
     }
 }
 
-/// A block being read: its kind, header position and key lines.
-struct OpenBlock {
+impl<'s> std::ops::Deref for Values<'s> {
+    type Target = [(&'s str, Span)];
+    fn deref(&self) -> &Self::Target {
+        match self {
+            Values::Inline(items, n) => &items[..*n as usize],
+            Values::Heap(h) => h,
+        }
+    }
+}
+
+impl Entry<'_> {
+    /// The span of all values, or of the key when there are none.
+    fn values_span(&self) -> Span {
+        self.all_values
+    }
+}
+
+/// A block being read: its kind, header position and key lines (the last of each key, and every
+/// `P=` line of a Bezier block).
+struct OpenBlock<'s> {
     kind: BlockKind,
     header: Span,
-    entries: Vec<Entry>,
+    entries: Vec<Entry<'s>>,
+    /// The entry of each key (a hostile block may hold a million keys).
+    index: HashMap<&'s str, usize>,
 }
 
 /// Parser state between lines.
-enum State {
+enum State<'s> {
     TopLevel,
-    InBlock(OpenBlock),
+    InBlock(OpenBlock<'s>),
     /// Skipping an unknown block up to its `end`; the span of its header.
     Skipping(Span),
 }
@@ -235,12 +356,48 @@ struct Seen {
 struct Parser<'s> {
     source: &'s SourceFile,
     diagnostics: Vec<Diagnostic>,
+    /// How many errors and others are in `diagnostics`.
+    kept: Omitted,
+    /// How many were reported past [`MAX_KEPT_DIAGNOSTICS`] and dropped.
+    omitted: Omitted,
+    /// Where a dropped diagnostic is built (its notes are added to it, then it is overwritten).
+    scratch: Diagnostic,
     scene: Scene,
     seen: Seen,
+    /// Untextured materials seen so far, by their numbers' bits (see [`Parser::share`]).
+    materials: HashMap<[u64; 12], Arc<Material>>,
 }
 
 impl<'s> Parser<'s> {
+    /// The shared copy of an untextured material equal to `m` (a scene of a million spheres in a
+    /// handful of materials keeps a handful); textured materials stay their own (their texture
+    /// reference names the line that set it).
+    fn share(&mut self, m: Material) -> Arc<Material> {
+        if m.texture.is_some() || m.bump.is_some() {
+            return Arc::new(m);
+        }
+        let key = [
+            m.color.x, m.color.y, m.color.z, m.diff, m.spec, m.refl, m.drefl, m.refr, m.rindex, m.absor.x,
+            m.absor.y, m.absor.z,
+        ]
+        .map(f64::to_bits);
+        self.materials.entry(key).or_insert_with(|| Arc::new(m)).clone()
+    }
+
     fn report(&mut self, severity: Severity, span: Span, message: impl Into<String>) -> &mut Diagnostic {
+        let error = severity == Severity::Error;
+        let (kept, omitted) = if error {
+            (&mut self.kept.errors, &mut self.omitted.errors)
+        } else {
+            (&mut self.kept.others, &mut self.omitted.others)
+        };
+        if *kept >= MAX_KEPT_DIAGNOSTICS {
+            // Counted, not kept; not even its text is made (the line may be huge).
+            *omitted += 1;
+            self.scratch = Diagnostic::general(severity, "");
+            return &mut self.scratch;
+        }
+        *kept += 1;
         let d = self.source.diagnostic(severity, span, message);
         self.diagnostics.push(d);
         let last = self.diagnostics.len() - 1;
@@ -258,8 +415,9 @@ impl<'s> Parser<'s> {
     fn run(&mut self) {
         let mut state = State::TopLevel;
         let source = self.source;
+        let mut tokens = Vec::new();
         for (number, line) in source.lines() {
-            let tokens = tokenize(line);
+            tokenize(line, &mut tokens);
             let Some(first) = tokens.first() else { continue };
             state = match state {
                 State::TopLevel => self.top_level_line(number, &tokens),
@@ -303,7 +461,7 @@ impl<'s> Parser<'s> {
                     .push("the file ends before the block is closed".into());
             }
         }
-        let has_errors = self.diagnostics.iter().any(Diagnostic::is_error);
+        let has_errors = parser_has_errors(&self.diagnostics, self.omitted);
         if self.scene.primitives.is_empty() && self.scene.lights.is_empty() && !has_errors {
             self.diagnostics.push(Diagnostic::general(
                 Severity::Warning,
@@ -313,23 +471,24 @@ impl<'s> Parser<'s> {
     }
 
     /// Handles a line outside any block; returns the state after it.
-    fn top_level_line(&mut self, line: u32, tokens: &[Token<'_>]) -> State {
+    fn top_level_line(&mut self, line: u32, tokens: &[Token<'s>]) -> State<'s> {
         let first = tokens[0];
         let span = first.span(line);
-        let start =
-            |kind: BlockKind, header: Span| State::InBlock(OpenBlock { kind, header, entries: Vec::new() });
+        let start = |kind: BlockKind, header: Span| {
+            State::InBlock(OpenBlock { kind, header, entries: Vec::new(), index: HashMap::new() })
+        };
         match first.text {
             "background" | "camera" => {
                 self.warn_trailing(line, &tokens[1..], "after the block name");
                 let kind = if first.text == "camera" { BlockKind::Camera } else { BlockKind::Background };
                 start(kind, span)
             }
-            "light" | "primitive" => {
+            "light" | "primitive" | "obj" => {
                 let Some(&ty) = tokens.get(1) else {
                     let choices = if first.text == "light" {
                         "`point`, `square`, `area` or `sphere`"
                     } else {
-                        "`sphere`, `plane`, `square` or `cylinder`"
+                        PRIMITIVE_TYPES
                     };
                     self.error(span, format!("`{}` needs a type: {choices}", first.text));
                     return State::Skipping(span);
@@ -339,10 +498,8 @@ impl<'s> Parser<'s> {
                     ("light", "point") => Some(BlockKind::Light(LightKind::Point)),
                     ("light", "square" | "area") => Some(BlockKind::Light(LightKind::Square)),
                     ("light", "sphere") => Some(BlockKind::Light(LightKind::Sphere)),
-                    ("primitive", "sphere") => Some(BlockKind::Primitive(PrimitiveKind::Sphere)),
-                    ("primitive", "plane") => Some(BlockKind::Primitive(PrimitiveKind::Plane)),
-                    ("primitive", "square") => Some(BlockKind::Primitive(PrimitiveKind::Square)),
-                    ("primitive", "cylinder") => Some(BlockKind::Primitive(PrimitiveKind::Cylinder)),
+                    // `obj` is another name of `primitive` (spec section 9).
+                    ("primitive" | "obj", ty) => PrimitiveKind::from_name(ty).map(BlockKind::Primitive),
                     _ => None,
                 };
                 match kind {
@@ -351,8 +508,11 @@ impl<'s> Parser<'s> {
                         start(kind, ty_span)
                     }
                     None => {
-                        let message = if first.text == "primitive" && LATER_PRIMITIVES.contains(&ty.text) {
-                            format!("`primitive {}` is not supported yet; the block is skipped", ty.text)
+                        let message = if first.text != "light" && IGNORED_PRIMITIVES.contains(&ty.text) {
+                            format!(
+                                "`{} {}` is not part of the scene language (the renderers that read it ignored it too); the block is skipped",
+                                first.text, ty.text
+                            )
                         } else {
                             format!("unknown {} type `{}`; the block is skipped", first.text, ty.text)
                         };
@@ -384,7 +544,7 @@ impl<'s> Parser<'s> {
     }
 
     /// Reads a `key= values` line into the open block.
-    fn key_line(&mut self, line: u32, tokens: &[Token<'_>], block: &mut OpenBlock) {
+    fn key_line(&mut self, line: u32, tokens: &[Token<'s>], block: &mut OpenBlock<'s>) {
         let first = tokens[0];
         let (key, key_len, glued, rest) = match first.text.split_once('=') {
             Some((key, after)) => (key, key.chars().count() as u32 + 1, after, &tokens[1..]),
@@ -412,24 +572,44 @@ impl<'s> Parser<'s> {
             self.error(key_span, "a key is missing before `=`");
             return;
         }
-        let mut values = Vec::with_capacity(rest.len() + 1);
-        if !glued.is_empty() {
+        let glued_value = (!glued.is_empty()).then(|| {
             let column = first.column + key_len;
-            values.push((glued.to_owned(), Span { line, column, len: glued.chars().count() as u32 }));
+            (glued, Span { line, column, len: glued.chars().count() as u32 })
+        });
+        let mut values = Values::new();
+        for v in
+            glued_value.into_iter().chain(rest.iter().map(|t| (t.text, t.span(line)))).take(MAX_VALUES_KEPT)
+        {
+            values.push(v);
         }
-        values.extend(rest.iter().map(|t| (t.text.to_owned(), t.span(line))));
-        if let Some(previous) = block.entries.iter().find(|e| e.key == key) {
-            let earlier = previous.key_span.line;
-            self.warning(
-                key_span,
-                format!("`{key}=` is given again; this value replaces the one on line {earlier}"),
-            );
+        let value_count = glued_value.is_some() as usize + rest.len();
+        let last_span = rest.last().map(|t| t.span(line)).or(glued_value.map(|(_, span)| span));
+        let all_values = match (values.first(), last_span) {
+            (Some((_, first)), Some(last)) => {
+                Span { line, column: first.column, len: last.column + last.len - first.column }
+            }
+            _ => key_span,
+        };
+        let repeatable = block.kind == BlockKind::Primitive(PrimitiveKind::Bezier) && key == BEZIER_POINT_KEY;
+        let entry = Entry { key, key_span, values, value_count, all_values };
+        match block.index.get(key).copied().filter(|_| !repeatable) {
+            Some(previous) => {
+                let earlier = block.entries[previous].key_span.line;
+                self.warning(
+                    key_span,
+                    format!("`{key}=` is given again; this value replaces the one on line {earlier}"),
+                );
+                block.entries[previous] = entry;
+            }
+            None => {
+                block.index.insert(key, block.entries.len());
+                block.entries.push(entry);
+            }
         }
-        block.entries.push(Entry { key: key.to_owned(), key_span, values });
     }
 
     /// Turns a complete block into scene data.
-    fn finish_block(&mut self, block: OpenBlock) {
+    fn finish_block(&mut self, block: OpenBlock<'s>) {
         let mut reader = BlockReader::new(block, self);
         match reader.kind {
             BlockKind::Background => reader.background(),
@@ -442,7 +622,7 @@ impl<'s> Parser<'s> {
 }
 
 fn is_block_keyword(word: &str) -> bool {
-    matches!(word, "background" | "camera" | "light" | "primitive")
+    matches!(word, "background" | "camera" | "light" | "primitive" | "obj")
 }
 
 /// A key's value could not be used; the error has been reported.
@@ -457,30 +637,43 @@ type Lookup<T> = Result<Option<T>, Reported>;
 struct BlockReader<'p, 's> {
     kind: BlockKind,
     header: Span,
-    /// The last entry of each key (later lines win).
-    entries: HashMap<String, Entry>,
-    used: Vec<String>,
+    /// The last entry of each key (later lines win), in file order of their first line.
+    entries: Vec<Entry<'s>>,
+    /// Whether each entry was read.
+    used: Vec<bool>,
+    /// The control points of a `primitive bezier` block (`P=` lines), in file order.
+    points: Vec<Entry<'s>>,
     parser: &'p mut Parser<'s>,
 }
 
 impl<'p, 's> BlockReader<'p, 's> {
-    fn new(block: OpenBlock, parser: &'p mut Parser<'s>) -> Self {
-        let mut entries = HashMap::new();
-        for e in block.entries {
-            entries.insert(e.key.clone(), e);
-        }
-        BlockReader { kind: block.kind, header: block.header, entries, used: Vec::new(), parser }
+    fn new(block: OpenBlock<'s>, parser: &'p mut Parser<'s>) -> Self {
+        let bezier = block.kind == BlockKind::Primitive(PrimitiveKind::Bezier);
+        let (points, entries): (Vec<Entry<'s>>, Vec<Entry<'s>>) =
+            block.entries.into_iter().partition(|e| bezier && e.key == BEZIER_POINT_KEY);
+        let used = vec![false; entries.len()];
+        BlockReader { kind: block.kind, header: block.header, entries, used, points, parser }
+    }
+
+    /// The entry of `key`, if the block has one.
+    fn find(&self, key: &str) -> Option<&Entry<'s>> {
+        self.entries.iter().find(|e| e.key == key)
+    }
+
+    /// Whether the block sets `key=`.
+    fn has(&self, key: &str) -> bool {
+        self.find(key).is_some()
     }
 
     /// The entry of `key`, marked as used.
-    fn entry(&mut self, key: &str) -> Option<Entry> {
-        let e = self.entries.get(key)?.clone();
-        self.used.push(key.to_owned());
-        Some(e)
+    fn entry(&mut self, key: &str) -> Option<Entry<'s>> {
+        let i = self.entries.iter().position(|e| e.key == key)?;
+        self.used[i] = true;
+        Some(self.entries[i].clone())
     }
 
     fn span_of(&self, key: &str) -> Span {
-        self.entries.get(key).map_or(self.header, Entry::values_span)
+        self.find(key).map_or(self.header, Entry::values_span)
     }
 
     fn error(&mut self, span: Span, message: impl Into<String>) -> &mut Diagnostic {
@@ -495,8 +688,8 @@ impl<'p, 's> BlockReader<'p, 's> {
     fn numbers(&mut self, key: &str, n: usize) -> Lookup<Vec<f64>> {
         let Some(entry) = self.entry(key) else { return Ok(None) };
         let what = if n == 1 { "a number".to_owned() } else { format!("{n} numbers") };
-        if entry.values.len() != n {
-            let found = entry.values.len();
+        if entry.value_count != n {
+            let found = entry.value_count;
             let message = if found == 0 {
                 format!("`{key}=` expects {what}")
             } else {
@@ -507,7 +700,7 @@ impl<'p, 's> BlockReader<'p, 's> {
         }
         let mut out = Vec::with_capacity(n);
         let mut bad = false;
-        for (text, span) in &entry.values {
+        for (text, span) in entry.values.iter() {
             match text.parse::<f64>() {
                 Ok(v) if v.is_finite() => out.push(v),
                 Ok(_) => {
@@ -545,7 +738,7 @@ impl<'p, 's> BlockReader<'p, 's> {
     /// The raw text after `key=` (for words and paths, which may contain spaces).
     fn text(&mut self, key: &str) -> Lookup<(String, Span)> {
         let Some(entry) = self.entry(key) else { return Ok(None) };
-        if entry.values.is_empty() {
+        if entry.value_count == 0 {
             self.error(entry.key_span, format!("`{key}=` needs a value"));
             return Err(Reported);
         }
@@ -612,8 +805,12 @@ impl<'p, 's> BlockReader<'p, 's> {
     fn geometry_error(&mut self, err: GeometryError) {
         let key = match &err {
             GeometryError::NonPositiveRadius(_) => "R",
-            GeometryError::ZeroVector(k) | GeometryError::ParallelAxes(k, _) => k,
-            GeometryError::ZeroAxis => "O2",
+            GeometryError::ZeroVector(k)
+            | GeometryError::ParallelAxes(k, _)
+            | GeometryError::TooLarge(k)
+            | GeometryError::TooSmall(k) => k,
+            GeometryError::ZeroAxis | GeometryError::AxisTooLong | GeometryError::AxisTooShort => "O2",
+            GeometryError::Degenerate(_) | GeometryError::ControlPoints(_) => "",
         };
         let span = self.span_of(key);
         let kind = self.kind;
@@ -648,34 +845,44 @@ impl<'p, 's> BlockReader<'p, 's> {
             cam.eye = o;
         }
         if let Ok(Some(n)) = self.vec3("N") {
-            match n.try_normalize() {
-                Some(n) => cam.dir = n,
-                None => {
+            match crate::error::unit_direction(n, "N") {
+                Ok(n) => cam.dir = n,
+                Err(_) => {
                     let span = self.span_of("N");
                     self.error(span, "the view direction `N=` must not be the zero vector");
                 }
             }
         }
+        // Whether the lens and image sizes all read; the aspect is compared only then (an error
+        // in one of them is not also a stretched picture).
+        let mut sizes_read = true;
         for (key, slot) in [("lens_W", &mut cam.lens_width), ("lens_H", &mut cam.lens_height)] {
-            if let Ok(Some(v)) = self.number(key) {
-                if v > 0.0 {
-                    *slot = v;
-                } else {
+            match self.number(key) {
+                Ok(Some(v)) if v > 0.0 => *slot = v,
+                Ok(Some(_)) => {
                     let span = self.span_of(key);
                     self.error(span, format!("`{key}=` must be positive"));
+                    sizes_read = false;
                 }
+                Ok(None) => {}
+                Err(Reported) => sizes_read = false,
             }
         }
         let side = MAX_IMAGE_SIDE as u64;
-        if let Ok(Some(w)) = self.integer("image_W", 1, side) {
-            cam.image_width = w as u32;
+        match self.integer("image_W", 1, side) {
+            Ok(Some(w)) => cam.image_width = w as u32,
+            Ok(None) => {}
+            Err(Reported) => sizes_read = false,
         }
-        if let Ok(Some(h)) = self.integer("image_H", 1, side) {
-            cam.image_height = h as u32;
+        match self.integer("image_H", 1, side) {
+            Ok(Some(h)) => cam.image_height = h as u32,
+            Ok(None) => {}
+            Err(Reported) => sizes_read = false,
         }
         if let Err(message) = check_image_size(cam.image_width, cam.image_height) {
             let span = self.span_of("image_W");
             self.error(span, message);
+            sizes_read = false;
         }
         let q = MAX_QUALITY as u64;
         if let Ok(Some(v)) = self.integer("shade_quality", 1, q) {
@@ -712,7 +919,8 @@ impl<'p, 's> BlockReader<'p, 's> {
                 self.error(span, "`focal_dist=` must be positive");
             }
         }
-        if let Some(message) = aspect_mismatch(&cam, cam.image_width, cam.image_height) {
+        if let Some(message) = aspect_mismatch(&cam, cam.image_width, cam.image_height).filter(|_| sizes_read)
+        {
             let span = self.span_of("lens_W");
             self.warning(span, message);
         }
@@ -722,10 +930,8 @@ impl<'p, 's> BlockReader<'p, 's> {
     /// The photon-mapping keys of the camera block, validated (spec section 10).
     fn photon_settings(&mut self) -> PhotonSettings {
         let mut photons = PhotonSettings::default();
-        let mut keys: Vec<(&'static str, Span)> = PhotonSettings::KEYS
-            .iter()
-            .filter_map(|&k| self.entries.get(k).map(|e| (k, e.key_span)))
-            .collect();
+        let mut keys: Vec<(&'static str, Span)> =
+            PhotonSettings::KEYS.iter().filter_map(|&k| self.find(k).map(|e| (k, e.key_span))).collect();
         keys.sort_by_key(|(_, span)| (span.line, span.column));
         photons.keys = keys.into_iter().map(|(k, span)| (k, self.parser.source.location(span))).collect();
         for (key, slot, max) in [
@@ -837,28 +1043,37 @@ impl<'p, 's> BlockReader<'p, 's> {
                 format!("unknown `blur= {blur}`; `exp` is the only distribution, and it is used"),
             );
         }
-        if let Ok(Some((path, span))) = self.text("texture") {
-            let location = self.parser.source.diagnostic(Severity::Note, span, "").location;
-            let source = match path.strip_prefix(BUILTIN_PREFIX) {
-                Some(name) => match Builtin::parse(name) {
-                    Ok(b) => Some(TextureSource::Builtin(b)),
-                    Err(message) => {
-                        self.error(span, message);
-                        None
-                    }
-                },
-                None => Some(TextureSource::File(path)),
-            };
-            if let (Some(source), Some(location)) = (source, location) {
-                m.texture = Some(TextureRef { source, location });
-            }
-        }
+        m.texture = self.texture_ref("texture");
+        // A normal map: `bump=`, or `NT=` (LuChengTHU's name for it); `bump=` wins if both are given.
+        let nt = self.texture_ref("NT");
+        m.bump = self.texture_ref("bump").or(nt);
         m
+    }
+
+    /// A texture named by `key=`: a file or a built-in texture.
+    fn texture_ref(&mut self, key: &str) -> Option<TextureRef> {
+        let Ok(Some((path, span))) = self.text(key) else { return None };
+        let location = self.parser.source.location(span);
+        let source = match path.strip_prefix(BUILTIN_PREFIX) {
+            Some(name) => match Builtin::parse(name) {
+                Ok(b) => TextureSource::Builtin(b),
+                Err(message) => {
+                    self.error(span, message);
+                    return None;
+                }
+            },
+            None => TextureSource::File(path),
+        };
+        Some(TextureRef { source, location })
     }
 
     fn primitive(&mut self, kind: PrimitiveKind) {
         let material = self.material();
         let shape = match kind {
+            PrimitiveKind::Triangle => self.triangle(),
+            PrimitiveKind::Mesh => self.mesh("file", "scale", "rotation", 1.0),
+            PrimitiveKind::Polyhedron => self.mesh("mesh", "size", "angles", std::f64::consts::PI / 180.0),
+            PrimitiveKind::Bezier => self.bezier(),
             PrimitiveKind::Sphere => {
                 let o = self.required_vec3("O", "the centre");
                 let r = self.required_number("R", "the radius");
@@ -899,7 +1114,9 @@ impl<'p, 's> BlockReader<'p, 's> {
                 let dx = self.required_vec3("Dx", "the first half axis");
                 let dy = self.required_vec3("Dy", "the second half axis");
                 match (o, dx, dy) {
-                    (Some(o), Some(dx), Some(dy)) => self.built(Square::new(o, dx, dy).map(Shape::Square)),
+                    (Some(o), Some(dx), Some(dy)) => {
+                        self.built(Square::new(o, dx, dy).map(|s| Shape::Square(Box::new(s))))
+                    }
                     _ => None,
                 }
             }
@@ -921,15 +1138,167 @@ impl<'p, 's> BlockReader<'p, 's> {
                 }
                 match (o1, o2, r) {
                     (Some(o1), Some(o2), Some(r)) => {
-                        self.built(Cylinder::new(o1, o2, r).map(Shape::Cylinder))
+                        self.built(Cylinder::new(o1, o2, r).map(|c| Shape::Cylinder(Box::new(c))))
                     }
                     _ => None,
                 }
             }
         };
         if let Some(shape) = shape {
+            let material = self.parser.share(material);
             self.parser.scene.primitives.push(Primitive { shape, material });
         }
+    }
+
+    /// `primitive triangle`: corners `P0= P1= P2=`, or `O1= O2= O3=`.
+    fn triangle(&mut self) -> Option<Shape> {
+        let form = if ["O1", "O2", "O3"].iter().any(|k| self.has(k))
+            && !["P0", "P1", "P2"].iter().any(|k| self.has(k))
+        {
+            ["O1", "O2", "O3"]
+        } else {
+            ["P0", "P1", "P2"]
+        };
+        let corners = form.map(|k| self.vec3(k));
+        if corners.iter().any(|c| c.is_err()) {
+            return None;
+        }
+        let missing: Vec<&str> =
+            form.iter().zip(&corners).filter(|(_, c)| matches!(c, Ok(None))).map(|(k, _)| *k).collect();
+        if !missing.is_empty() {
+            let header = self.header;
+            let list = missing.iter().map(|k| format!("`{k}=`")).collect::<Vec<_>>().join(", ");
+            self.error(header, format!("`primitive triangle` needs {list} (its corners)"))
+                .notes
+                .push("give the corners as `P0= P1= P2=` or as `O1= O2= O3=`".into());
+            return None;
+        }
+        let [a, b, c] = corners.map(|c| c.ok().flatten().unwrap_or_default());
+        match Triangle::new(a, b, c) {
+            Ok(t) => Some(Shape::Triangle(Box::new(t))),
+            Err(e) => {
+                let span = self.span_of(form[2]);
+                self.error(span, format!("in `primitive triangle`, {e}"));
+                None
+            }
+        }
+    }
+
+    /// `primitive mesh` (`file=`, `O=`, `scale=`, `rotation=` in radians) and `primitive
+    /// polyhedron` (`mesh=`, `O=`, `size=`, `angles=` in degrees): the file is loaded when the
+    /// scene is prepared.
+    fn mesh(
+        &mut self,
+        file_key: &str,
+        scale_key: &str,
+        rotation_key: &str,
+        to_radians: f64,
+    ) -> Option<Shape> {
+        let file = match self.text(file_key) {
+            Ok(Some(f)) => Some(f),
+            Ok(None) => {
+                let header = self.header;
+                self.error(header, format!("`{}` needs `{file_key}=` (the OBJ file)", self.kind));
+                None
+            }
+            Err(Reported) => None,
+        };
+        let origin = self.vec3("O");
+        let scale = match self.numbers_1_or_3(scale_key) {
+            Ok(Some(s)) if s.x == 0.0 || s.y == 0.0 || s.z == 0.0 => {
+                let span = self.span_of(scale_key);
+                self.error(
+                    span,
+                    format!("`{scale_key}=` must not have a zero component (the mesh would be flat)"),
+                );
+                Err(Reported)
+            }
+            other => other,
+        };
+        let rotation = self.vec3(rotation_key);
+        let (Some((path, span)), Ok(origin), Ok(scale), Ok(rotation)) = (file, origin, scale, rotation)
+        else {
+            return None;
+        };
+        let transform = MeshTransform {
+            origin: origin.unwrap_or(DVec3::ZERO),
+            scale: scale.unwrap_or(DVec3::ONE),
+            rotation: rotation.unwrap_or(DVec3::ZERO) * to_radians,
+        };
+        let location = self.parser.source.location(span);
+        Some(Shape::MeshFile(Box::new(MeshFile { path, location, transform })))
+    }
+
+    /// A vector of 3 numbers, or 1 number for all three components.
+    fn numbers_1_or_3(&mut self, key: &str) -> Lookup<DVec3> {
+        match self.find(key).map(|e| e.values.len()) {
+            Some(1) => Ok(self.number(key)?.map(DVec3::splat)),
+            _ => self.vec3(key),
+        }
+    }
+
+    /// `primitive bezier`: axis `O1=` to `O2=` with profile points `P= z r` (one a line), or
+    /// `center=` with `V0= .. V3=` (abcbdf's form: a cubic about the vertical through `center`).
+    fn bezier(&mut self) -> Option<Shape> {
+        if self.has("center") {
+            let center = self.required_vec3("center", "the point the vertical axis passes through");
+            let v = ["V0", "V1", "V2", "V3"].map(|k| self.required_vec3(k, "a control point of the cubic"));
+            let center = center?;
+            if v.iter().any(Option::is_none) {
+                return None;
+            }
+            let profile: Vec<DVec2> =
+                v.iter().flatten().map(|p| DVec2::new(p.z, (p.x - center.x).abs())).collect();
+            let base = DVec3::new(center.x, center.y, 0.0);
+            return self.built(Bezier::new(base, DVec3::Z, profile).map(|b| Shape::Bezier(Box::new(b))));
+        }
+        let o1 = self.required_vec3("O1", "the bottom of the axis");
+        let o2 = self.required_vec3("O2", "a point up the axis");
+        let points = std::mem::take(&mut self.points);
+        let mut profile = Vec::with_capacity(points.len());
+        let mut bad = false;
+        for e in &points {
+            let mut values = Vec::with_capacity(2);
+            for (text, span) in e.values.iter() {
+                match text.parse::<f64>() {
+                    Ok(v) if v.is_finite() => values.push(v),
+                    _ => {
+                        self.error(*span, format!("`P=` expects 2 numbers (z r); `{text}` is not a number"));
+                        bad = true;
+                    }
+                }
+            }
+            if values.len() == 2 {
+                profile.push(DVec2::new(values[0], values[1]));
+            } else if !bad {
+                let found = e.values.len();
+                self.error(e.values_span(), format!("`P=` expects 2 numbers (z r), found {found}"));
+                bad = true;
+            }
+        }
+        let (o1, o2) = (o1?, o2?);
+        if bad {
+            return None;
+        }
+        if profile.len() < 2 || profile.len() > crate::geometry::bezier::MAX_CONTROL_POINTS {
+            let header = self.header;
+            self.error(
+                header,
+                format!(
+                    "`primitive bezier` needs 2 to 32 `P= z r` lines (its profile), not {}",
+                    profile.len()
+                ),
+            )
+            .notes
+            .push("one line per control point, in order; or give `center=` and `V0=` .. `V3=`".into());
+            return None;
+        }
+        if profile.iter().any(|p| p.y < 0.0) {
+            let span = points.iter().find(|e| e.values.get(1).is_some_and(|v| v.0.starts_with('-')));
+            let span = span.map_or(self.header, Entry::values_span);
+            self.warning(span, "a negative `r` in `P= z r` is a distance from the axis; its size is used");
+        }
+        self.built(Bezier::new(o1, o2 - o1, profile).map(|b| Shape::Bezier(Box::new(b))))
     }
 
     /// The constructed value, or `None` after reporting why it could not be built.
@@ -940,12 +1309,13 @@ impl<'p, 's> BlockReader<'p, 's> {
     /// Warns about keys the block does not know.
     fn finish(self) {
         let BlockReader { kind, entries, used, parser, .. } = self;
-        let mut unknown: Vec<&Entry> = entries.values().filter(|e| !used.contains(&e.key)).collect();
+        let mut unknown: Vec<&Entry> =
+            entries.iter().zip(&used).filter(|(_, u)| !**u).map(|(e, _)| e).collect();
         unknown.sort_by_key(|e| (e.key_span.line, e.key_span.column));
         for e in unknown {
             let known = known_keys(kind);
             let d = parser.warning(e.key_span, format!("unknown key `{}=` in `{kind}`; ignored", e.key));
-            if let Some(k) = known.iter().find(|k| k.eq_ignore_ascii_case(&e.key)) {
+            if let Some(k) = known.iter().find(|k| k.eq_ignore_ascii_case(e.key)) {
                 d.notes.push(format!("did you mean `{k}=`? keys are case-sensitive"));
             } else {
                 d.notes.push(format!(
@@ -981,6 +1351,10 @@ fn known_keys(kind: BlockKind) -> Vec<&'static str> {
         BlockKind::Primitive(PrimitiveKind::Plane) => &["N", "R", "Dx", "Dy"],
         BlockKind::Primitive(PrimitiveKind::Square) => &["O", "Dx", "Dy"],
         BlockKind::Primitive(PrimitiveKind::Cylinder) => &["O1", "O2", "R", "De", "Dc"],
+        BlockKind::Primitive(PrimitiveKind::Triangle) => &["P0", "P1", "P2", "O1", "O2", "O3"],
+        BlockKind::Primitive(PrimitiveKind::Mesh) => &["file", "O", "scale", "rotation"],
+        BlockKind::Primitive(PrimitiveKind::Polyhedron) => &["mesh", "O", "size", "angles"],
+        BlockKind::Primitive(PrimitiveKind::Bezier) => &["O1", "O2", "P", "center", "V0", "V1", "V2", "V3"],
     };
     let mut keys = specific.to_vec();
     match kind {

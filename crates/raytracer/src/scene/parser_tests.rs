@@ -1,6 +1,6 @@
 //! Tests of the scene parser: every key of every block, and every diagnostic with its position.
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 use super::*;
 use crate::geometry::Shape;
@@ -144,7 +144,7 @@ fn lights_of_every_type() {
 #[test]
 fn material_keys_and_defaults() {
     let p = ok(SPHERE);
-    assert_eq!(p.scene.primitives[0].material, crate::material::Material::default());
+    assert_eq!(*p.scene.primitives[0].material, crate::material::Material::default());
     let text = "primitive sphere\n O= 0 0 0\n R= 1\n color= 0.5 0.6 0.7\n texture= marble.bmp\n diff= 0.1\n \
                 spec= 0.2\n refl= 0.3\n drefl= 0.4\n blur= exp\n refr= 0.5\n rindex= 1.5\n absor= 1 2 3\nend\n";
     let m = &ok(text).scene.primitives[0].material;
@@ -249,7 +249,7 @@ fn unknown_keys_blocks_and_types_are_warnings() {
     let text = "primitive sphere\n O= 0 0 0\n R= 1\n shininess= 3\n o= 1 1 1\nend\n\
                 fog\n density= 3\nend\n\
                 light laser\n O= 0 0 0\nend\n\
-                primitive triangle\n P0= 0 0 0\nend\n";
+                primitive torus\n O= 0 0 0\nend\n";
     assert_eq!(
         diagnostics(text),
         vec![
@@ -261,7 +261,7 @@ fn unknown_keys_blocks_and_types_are_warnings() {
                 Severity::Warning,
                 13,
                 11,
-                "`primitive triangle` is not supported yet; the block is skipped".into()
+                "`primitive torus` is not part of the scene language (the renderers that read it ignored it too); the block is skipped".into()
             ),
         ]
     );
@@ -448,7 +448,7 @@ fn required_keys_are_errors_at_the_header() {
     );
     assert_eq!(
         single_error("primitive\nend\n"),
-        (1, 1, "`primitive` needs a type: `sphere`, `plane`, `square` or `cylinder`".into())
+        (1, 1, "`primitive` needs a type: `sphere`, `plane`, `square`, `cylinder`, `triangle`, `mesh`, `polyhedron` or `bezier`".into())
     );
 }
 
@@ -489,6 +489,71 @@ fn invalid_geometry_is_an_error_at_the_key() {
 }
 
 #[test]
+fn overflow_and_underflow_are_called_so() {
+    // Perpendicular axes whose cross product overflows are not "parallel".
+    assert_eq!(
+        single_error("primitive square\n O= 0 0 0\n Dx= 1e308 0 0\n Dy= 0 1e308 0\nend\n"),
+        (3, 6, "in `primitive square`, `Dx=` is too large to use".into())
+    );
+    assert_eq!(
+        single_error("light square\n O= 0 0 0\n Dx= 1e-300 0 0\n Dy= 0 1 0\n color= 1 1 1\nend\n"),
+        (3, 6, "in `light square`, `Dx=` is too small to use".into())
+    );
+    assert_eq!(
+        single_error("primitive square\n O= 0 0 0\n Dx= 1e-160 0 0\n Dy= 0 1e-170 0\nend\n"),
+        (4, 6, "in `primitive square`, `Dy=` is too small to use".into())
+    );
+    assert_eq!(
+        single_error("primitive cylinder\n O1= 0 0 -1e300\n O2= 0 0 1e300\n R= 1\nend\n"),
+        (3, 6, "in `primitive cylinder`, the axis from `O1=` to `O2=` is too long to use".into())
+    );
+    assert_eq!(
+        single_error("primitive cylinder\n O1= 0 0 0\n O2= 0 0 1e-300\n R= 1\nend\n"),
+        (3, 6, "in `primitive cylinder`, the axis from `O1=` to `O2=` is too short to use".into())
+    );
+    assert_eq!(
+        single_error(
+            "primitive plane\n N= 0 0 1\n R= 0\n Dx= 1e-300 0 0\n Dy= 0 1 0\n texture= builtin:wood\nend\n"
+        ),
+        (4, 6, "in `primitive plane`, `Dx=` is too small to use".into())
+    );
+    assert_eq!(
+        single_error(
+            "primitive plane\n N= 0 0 1\n R= 0\n Dx= 1 0 0\n Dy= 0 1e200 0\n texture= builtin:wood\nend\n"
+        ),
+        (5, 6, "in `primitive plane`, `Dy=` is too large to use".into())
+    );
+    // A tiny or huge direction is still a direction.
+    let p = ok(
+        "primitive plane\n N= 1e-300 0 0\n R= 1\nend\nprimitive sphere\n O= 0 0 0\n R= 1\n De= 0 0 1e-300\n Dc= 1e300 0 0\nend\ncamera\n N= 0 1e-300 0\nend\n",
+    );
+    let Shape::Plane(plane) = &p.scene.primitives[0].shape else { panic!("a plane") };
+    assert_eq!(plane.normal, DVec3::X);
+    let Shape::Sphere(sphere) = &p.scene.primitives[1].shape else { panic!("a sphere") };
+    assert_eq!((sphere.pole, sphere.seam), (DVec3::Z, DVec3::X));
+    assert_eq!(p.scene.camera.dir, DVec3::Y);
+}
+
+#[test]
+fn diagnostics_past_the_cap_are_counted_not_kept() {
+    // 100,000 unclosed blocks: three errors each.
+    let text = "primitive sphere\n".repeat(100_000);
+    let e = parse(&source(&text)).expect_err("errors");
+    assert_eq!(e.diagnostics.iter().filter(|d| d.is_error()).count(), MAX_KEPT_DIAGNOSTICS);
+    assert_eq!(e.error_count(), 300_000, "{:?}", e.omitted);
+    assert!(e.to_string().contains(&format!("... and {} more\n", 300_000 - MAX_KEPT_DIAGNOSTICS)));
+    // Warnings are capped on their own, so an error after many warnings is still kept.
+    let text = format!("{}primitive sphere\n R= 1\nend\n", "end\n".repeat(10_000));
+    let e = parse(&source(&text)).expect_err("errors");
+    assert_eq!(e.error_count(), 1);
+    assert_eq!(e.diagnostics.len(), MAX_KEPT_DIAGNOSTICS + 1);
+    assert_eq!(e.omitted, Omitted { errors: 0, others: 10_000 - MAX_KEPT_DIAGNOSTICS });
+    // A warning-only file past the cap still parses, and says how many were left out.
+    let p = ok(&format!("{}light point\n O= 0 0 0\n color= 1 1 1\nend\n", "end\n".repeat(60)));
+    assert_eq!((p.diagnostics.len(), p.omitted.others), (MAX_KEPT_DIAGNOSTICS, 10));
+}
+
+#[test]
 fn invalid_camera_values_are_errors() {
     assert_eq!(
         single_error("camera\n N= 0 0 0\nend\n"),
@@ -523,6 +588,23 @@ fn invalid_camera_values_are_errors() {
         single_error("primitive sphere\n O= 0 0 0\n R= 1\n refr= 1\n rindex= 0\nend\n"),
         (5, 10, "`rindex=` must be positive".into())
     );
+}
+
+#[test]
+fn a_bad_image_or_lens_size_is_one_error_without_an_aspect_warning() {
+    for text in [
+        "camera\n image_W= 0\n lens_W= 1\n lens_H= 1\nend\n",
+        "camera\n image_H= 3.5\n lens_W= 1\n lens_H= 1\nend\n",
+        "camera\n lens_W= -1\n image_W= 640\n image_H= 380\nend\n",
+        "camera\n lens_H= x\n image_W= 640\n image_H= 380\nend\n",
+    ] {
+        let all = diagnostics(text);
+        assert_eq!(all.len(), 1, "{text}: {all:#?}");
+        assert_eq!(all[0].0, Severity::Error, "{text}");
+    }
+    // A valid but mismatched size still draws the warning.
+    let all = diagnostics("camera\n image_W= 640\n image_H= 380\n lens_W= 1\n lens_H= 1\nend\n");
+    assert!(all[0].3.contains("will be stretched"), "{all:#?}");
 }
 
 #[test]
@@ -651,4 +733,122 @@ mod properties {
             check(&text);
         }
     }
+}
+
+#[test]
+fn triangles_in_both_forms_and_obj_as_a_block_name() {
+    let text = "primitive triangle\n P0= 0 0 0\n P1= 1 0 0\n P2= 0 1 0\n color= 1 0 0\nend\n\
+                obj triangle\n O1= 0 0 1\n O2= 0 1 1\n O3= 1 0 1\nend\n";
+    let prims = ok(text).scene.primitives;
+    match &prims[0].shape {
+        Shape::Triangle(t) => assert_eq!(t.normal, DVec3::Z),
+        other => panic!("{other:?}"),
+    }
+    match &prims[1].shape {
+        Shape::Triangle(t) => assert_eq!(t.corners[2], DVec3::new(1.0, 0.0, 1.0)),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(prims[0].material.color, DVec3::X);
+    let (line, _, message) = single_error("primitive triangle\n P0= 0 0 0\n P1= 1 0 0\nend\n");
+    assert_eq!((line, message.as_str()), (1, "`primitive triangle` needs `P2=` (its corners)"));
+    let (line, _, message) = single_error("primitive triangle\n P0= 0 0 0\n P1= 1 0 0\n P2= 2 0 0\nend\n");
+    assert_eq!(line, 4);
+    assert!(message.contains("collinear"), "{message}");
+}
+
+#[test]
+fn mesh_and_polyhedron_keys_and_defaults() {
+    use crate::geometry::MeshTransform;
+    let text = "primitive mesh\n file= models/bunny.obj\n O= 1 2 3\n scale= 2\n rotation= 0 0 1.5\nend\n\
+                primitive polyhedron\n mesh= teapot.obj\n size= 1 2 3\n angles= 90 0 0\nend\n\
+                primitive polyhedron\n mesh= a b.obj\nend\n";
+    let prims = ok(text).scene.primitives;
+    let file = |i: usize| match &prims[i].shape {
+        Shape::MeshFile(f) => (f.path.clone(), f.transform),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(
+        file(0),
+        (
+            "models/bunny.obj".into(),
+            MeshTransform {
+                origin: DVec3::new(1.0, 2.0, 3.0),
+                scale: DVec3::splat(2.0),
+                rotation: DVec3::new(0.0, 0.0, 1.5)
+            }
+        )
+    );
+    let (path, t) = file(1);
+    assert_eq!((path.as_str(), t.scale), ("teapot.obj", DVec3::new(1.0, 2.0, 3.0)));
+    assert!((t.rotation.x - std::f64::consts::FRAC_PI_2).abs() < 1e-15, "degrees become radians");
+    assert_eq!(file(2), ("a b.obj".into(), MeshTransform::default()));
+    let (line, _, message) = single_error("primitive mesh\n O= 0 0 0\nend\n");
+    assert_eq!((line, message.as_str()), (1, "`primitive mesh` needs `file=` (the OBJ file)"));
+    let (line, _, message) = single_error("primitive polyhedron\n mesh= x.obj\n size= 1 0 1\nend\n");
+    assert_eq!(line, 3);
+    assert!(message.contains("zero component"), "{message}");
+}
+
+#[test]
+fn bezier_in_both_forms() {
+    let text = "primitive bezier\n O1= 0 0 0\n O2= 0 0 2\n P= 0 0\n P= 0.5 1 // a point\n P= 1 0.5\n color= 0 0 1\nend\n\
+                primitive bezier\n center= 1 1 0\n V0= 1.5 1 0\n V1= 2 1 0.5\n V2= 0.2 1 1\n V3= 1.3 1 2\nend\n";
+    let prims = ok(text).scene.primitives;
+    match &prims[0].shape {
+        Shape::Bezier(b) => {
+            assert_eq!(b.profile, vec![DVec2::new(0.0, 0.0), DVec2::new(0.5, 1.0), DVec2::new(1.0, 0.5)]);
+            assert_eq!(b.axis, DVec3::Z);
+        }
+        other => panic!("{other:?}"),
+    }
+    match &prims[1].shape {
+        Shape::Bezier(b) => {
+            // Radius |V.x - center.x|, height V.z.
+            assert_eq!(
+                b.profile,
+                vec![
+                    DVec2::new(0.0, 0.5),
+                    DVec2::new(0.5, 1.0),
+                    DVec2::new(1.0, 0.8),
+                    DVec2::new(2.0, 0.30000000000000004)
+                ]
+            );
+            assert_eq!(b.base, DVec3::new(1.0, 1.0, 0.0));
+        }
+        other => panic!("{other:?}"),
+    }
+    // The points are repeated keys, not replacements: no warning.
+    assert!(ok(text).diagnostics.is_empty());
+    let (line, _, message) = single_error("primitive bezier\n O1= 0 0 0\n O2= 0 0 1\n P= 0 1\nend\n");
+    assert_eq!(line, 1);
+    assert!(message.contains("2 to 32 `P= z r` lines"), "{message}");
+    let (line, column, message) =
+        single_error("primitive bezier\n O1= 0 0 0\n O2= 0 0 1\n P= 0 1\n P= 1\nend\n");
+    assert_eq!((line, column), (5, 5));
+    assert!(message.contains("`P=` expects 2 numbers"), "{message}");
+}
+
+#[test]
+fn normal_maps_under_both_names() {
+    let text = "primitive sphere\n O= 0 0 0\n R= 1\n bump= waves.png\nend\n\
+                primitive sphere\n O= 0 0 0\n R= 1\n NT= builtin:stripes:4\nend\n";
+    let prims = ok(text).scene.primitives;
+    assert_eq!(
+        prims[0].material.bump.as_ref().map(|t| t.source.clone()),
+        Some(TextureSource::File("waves.png".into()))
+    );
+    assert_eq!(
+        prims[1].material.bump.as_ref().map(|t| t.source.clone()),
+        Some(TextureSource::Builtin(Builtin::Stripes(4)))
+    );
+}
+
+#[test]
+fn equal_untextured_materials_are_shared() {
+    let text = "primitive sphere\n O= 0 0 0\n R= 1\n color= 1 0 0\n diff= 0.5\nend\n\
+                primitive sphere\n O= 3 0 0\n R= 1\n diff= 0.5\n color= 1 0 0\nend\n\
+                primitive sphere\n O= 6 0 0\n R= 1\n diff= 0.6\n color= 1 0 0\nend\n";
+    let prims = ok(text).scene.primitives;
+    assert!(std::sync::Arc::ptr_eq(&prims[0].material, &prims[1].material));
+    assert!(!std::sync::Arc::ptr_eq(&prims[0].material, &prims[2].material));
 }

@@ -26,21 +26,75 @@ pub struct SourceFile {
     line_starts: Vec<usize>,
 }
 
+/// Largest scene file read, in bytes (32 MiB). The course's scenes take a few kilobytes; the
+/// limit keeps a wrong path (a disk image, `/dev/zero`) from being read into memory.
+pub const MAX_SCENE_FILE_BYTES: u64 = 32 << 20;
+
 /// A scene file that could not be read.
 #[derive(Debug, thiserror::Error)]
-#[error("cannot read scene file `{path}`: {source}")]
-pub struct ReadError {
-    /// The path as given.
-    pub path: PathBuf,
-    /// The operating-system error.
-    #[source]
-    pub source: std::io::Error,
+pub enum ReadError {
+    /// The operating system refused.
+    #[error("cannot read scene file `{}`: {source}", .path.display())]
+    Io {
+        /// The path as given.
+        path: PathBuf,
+        /// The operating-system error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The path names a folder.
+    #[error("cannot read scene file `{}`: it is a directory", .path.display())]
+    Directory {
+        /// The path as given.
+        path: PathBuf,
+    },
+    /// The path names a device, a pipe or a socket.
+    #[error("cannot read scene file `{}`: it is not a regular file", .path.display())]
+    NotAFile {
+        /// The path as given.
+        path: PathBuf,
+    },
+    /// The file is larger than [`MAX_SCENE_FILE_BYTES`].
+    #[error(
+        "cannot read scene file `{}`: it is larger than {} MiB, the most a scene file may take",
+        .path.display(),
+        MAX_SCENE_FILE_BYTES >> 20
+    )]
+    TooLarge {
+        /// The path as given.
+        path: PathBuf,
+    },
 }
 
 impl SourceFile {
     /// Reads and decodes a scene file; texture paths will be resolved against its folder first.
+    /// Folders, devices and pipes, and files over [`MAX_SCENE_FILE_BYTES`], are refused before
+    /// anything is read.
     pub fn read(path: &Path) -> Result<SourceFile, ReadError> {
-        let bytes = std::fs::read(path).map_err(|source| ReadError { path: path.to_path_buf(), source })?;
+        use std::io::Read;
+        let io = |source| ReadError::Io { path: path.to_path_buf(), source };
+        let check = |metadata: &std::fs::Metadata| {
+            if metadata.is_dir() {
+                Err(ReadError::Directory { path: path.to_path_buf() })
+            } else if !metadata.is_file() {
+                Err(ReadError::NotAFile { path: path.to_path_buf() })
+            } else if metadata.len() > MAX_SCENE_FILE_BYTES {
+                Err(ReadError::TooLarge { path: path.to_path_buf() })
+            } else {
+                Ok(())
+            }
+        };
+        // Before opening: opening a named pipe would wait for a writer.
+        check(&std::fs::metadata(path).map_err(io)?)?;
+        let file = std::fs::File::open(path).map_err(io)?;
+        let metadata = file.metadata().map_err(io)?;
+        check(&metadata)?;
+        // The file may grow while it is read: read one byte past the limit at most.
+        let mut bytes = Vec::with_capacity(metadata.len() as usize);
+        file.take(MAX_SCENE_FILE_BYTES + 1).read_to_end(&mut bytes).map_err(io)?;
+        if bytes.len() as u64 > MAX_SCENE_FILE_BYTES {
+            return Err(ReadError::TooLarge { path: path.to_path_buf() });
+        }
         let dir = path
             .parent()
             .map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() });
@@ -132,6 +186,26 @@ mod tests {
         let src = SourceFile::from_bytes("t", None, bytes);
         assert_eq!(src.line(1), "# 设置");
         assert_eq!(src.line(2), "O= 1 2 3");
+    }
+
+    #[test]
+    fn folders_devices_and_huge_files_are_refused_before_reading() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let err = SourceFile::read(dir.path()).expect_err("a folder");
+        assert!(err.to_string().ends_with("it is a directory"), "{err}");
+        #[cfg(unix)]
+        {
+            let err = SourceFile::read(Path::new("/dev/zero")).expect_err("a device");
+            assert!(err.to_string().ends_with("it is not a regular file"), "{err}");
+        }
+        // A sparse file over the limit: refused from its size, without reading it.
+        let big = dir.path().join("big.txt");
+        let file = std::fs::File::create(&big).expect("create");
+        file.set_len(MAX_SCENE_FILE_BYTES + 1).expect("sparse file");
+        let err = SourceFile::read(&big).expect_err("too large");
+        assert!(err.to_string().contains("larger than 32 MiB"), "{err}");
+        let err = SourceFile::read(&dir.path().join("none.txt")).expect_err("missing");
+        assert!(matches!(err, ReadError::Io { .. }), "{err}");
     }
 
     #[test]

@@ -38,7 +38,7 @@ pub fn course_assets() -> Option<PathBuf> {
     if std::env::var_os("CI").is_some() {
         panic!("{message} (required under CI)");
     }
-    eprintln!("\n**** SKIPPED: {message} ****\n");
+    test_skips::skip("raytracer course-data tests", &message);
     None
 }
 
@@ -86,19 +86,27 @@ pub struct Difference {
     pub worst: u8,
     /// Fraction of pixels with some channel differing by more than 24.
     pub fraction_over_24: f64,
+    /// Fraction of pixels with some channel differing by more than 2 (more than rounding).
+    pub fraction_over_2: f64,
 }
 
 pub fn difference(a: &RgbImage, b: &RgbImage) -> Difference {
     assert_eq!(a.dimensions(), b.dimensions(), "image sizes differ");
-    let (mut sum, mut worst, mut over) = (0u64, 0u8, 0usize);
+    let (mut sum, mut worst, mut over, mut over_2) = (0u64, 0u8, 0usize, 0usize);
     for (pa, pb) in a.pixels().zip(b.pixels()) {
         let d = (0..3).map(|c| pa.0[c].abs_diff(pb.0[c])).max().unwrap_or(0);
         over += (d > 24) as usize;
+        over_2 += (d > 2) as usize;
         worst = worst.max(d);
         sum += (0..3).map(|c| pa.0[c].abs_diff(pb.0[c]) as u64).sum::<u64>();
     }
     let n = (a.width() * a.height()) as f64;
-    Difference { mean: sum as f64 / (3.0 * n), worst, fraction_over_24: over as f64 / n }
+    Difference {
+        mean: sum as f64 / (3.0 * n),
+        worst,
+        fraction_over_24: over as f64 / n,
+        fraction_over_2: over_2 as f64 / n,
+    }
 }
 
 /// Writes the actual image and an amplified difference image under `target/test-output`;

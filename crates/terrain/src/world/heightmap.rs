@@ -4,7 +4,7 @@ use std::path::Path;
 
 use image::DynamicImage;
 
-use super::{WorldError, read_image};
+use super::{WorldError, decode_checked, header_decoder, open_decoder};
 
 /// Largest heightmap side accepted, in samples. Beyond this the mesh no longer fits the buffers of
 /// common GPUs (and the course maps are 256 wide); it keeps absurd inputs from exhausting memory.
@@ -87,11 +87,26 @@ impl Heightmap {
     }
 
     /// Reads a heightmap from an image file (PNG, BMP, JPEG, ...; the format is recognised from
-    /// the content). Errors name the file.
+    /// the content). The size is checked from the file's header before it is decoded. Errors
+    /// name the file.
     pub fn load(path: &Path) -> Result<Self, WorldError> {
-        let image = read_image(path)?;
-        Self::from_image(&image)
-            .map_err(|problem| WorldError::BadHeightmap { path: path.to_path_buf(), problem })
+        Self::decode_from(open_decoder(path)?, path)
+    }
+
+    /// Reads a heightmap from an image held in memory, as [`Heightmap::load`] reads a file
+    /// (`name` is used in messages).
+    pub fn decode(bytes: &[u8], name: &str) -> Result<Self, WorldError> {
+        let path = Path::new(name);
+        Self::decode_from(header_decoder(image::ImageReader::new(std::io::Cursor::new(bytes)), path)?, path)
+    }
+
+    /// Checks the size a decoder's header gives against the heightmap's limits, then decodes.
+    fn decode_from(decoder: impl image::ImageDecoder, path: &Path) -> Result<Self, WorldError> {
+        let bad = |problem| WorldError::BadHeightmap { path: path.to_path_buf(), problem };
+        let (columns, rows) = image::ImageDecoder::dimensions(&decoder);
+        Self::check_size(columns, rows).map_err(bad)?;
+        let image = decode_checked(decoder, path)?;
+        Self::from_image(&image).map_err(bad)
     }
 
     /// Whether a heightmap may have `columns` x `rows` samples (2 to [`MAX_HEIGHTMAP_SIDE`] per side).

@@ -60,6 +60,29 @@ pub enum WorldError {
         /// The files not found in it.
         missing: Vec<String>,
     },
+    /// An image too large to load, found from its header before decoding.
+    #[error(
+        "{} is {width}x{height} pixels, larger than the {MAX_IMAGE_SIDE} pixels a side an image may have",
+        path.display()
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+    },
+    /// An image with no pixels (a width or a height of 0).
+    #[error("{} is an empty image ({width}x{height} pixels)", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// Its width in pixels.
+        width: u32,
+        /// Its height in pixels.
+        height: u32,
+    },
     /// The asset path is not a folder.
     #[error("{} is not a folder", path.display())]
     NotAFolder {
@@ -140,14 +163,60 @@ pub struct World {
     pub water: RgbaImage,
 }
 
-/// Decodes an image file, recognising its format from its content. Errors name the file.
+/// Largest side of any image the world loads, in pixels (sky faces and colour maps; heightmaps
+/// have their own, smaller limit, [`MAX_HEIGHTMAP_SIDE`]).
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+/// An image file's decoder, its format recognised from the content, with its header read and
+/// nothing decoded yet.
+fn open_decoder(path: &Path) -> Result<impl image::ImageDecoder, WorldError> {
+    let read = |source| WorldError::Read { path: path.to_path_buf(), source };
+    header_decoder(image::ImageReader::open(path).map_err(read)?, path)
+}
+
+/// The decoder of an image read from `reader` (`path` names it in messages), as
+/// [`open_decoder`].
+fn header_decoder<'a, R: std::io::BufRead + std::io::Seek + 'a>(
+    reader: image::ImageReader<R>,
+    path: &Path,
+) -> Result<impl image::ImageDecoder + use<'a, R>, WorldError> {
+    let read = |source| WorldError::Read { path: path.to_path_buf(), source };
+    let mut reader = reader.with_guessed_format().map_err(read)?;
+    // The header only: no size limit yet, so that the size can be named in the message.
+    let mut limits = image::Limits::no_limits();
+    limits.max_alloc = Some(64 << 20);
+    reader.limits(limits);
+    reader.into_decoder().map_err(|source| WorldError::Decode { path: path.to_path_buf(), source })
+}
+
+/// The size of an image file in pixels, read from its header without decoding it.
+pub fn image_size(path: &Path) -> Result<(u32, u32), WorldError> {
+    open_decoder(path).map(|decoder| image::ImageDecoder::dimensions(&decoder))
+}
+
+/// Decodes an image file, recognising its format from its content. The size is checked from
+/// the header first (at most [`MAX_IMAGE_SIDE`] a side), and the decoder may allocate no more
+/// than the picture needs. Errors name the file.
 pub fn read_image(path: &Path) -> Result<DynamicImage, WorldError> {
-    let reader = image::ImageReader::open(path)
-        .map_err(|source| WorldError::Read { path: path.to_path_buf(), source })?;
-    let reader = reader
-        .with_guessed_format()
-        .map_err(|source| WorldError::Read { path: path.to_path_buf(), source })?;
-    reader.decode().map_err(|source| WorldError::Decode { path: path.to_path_buf(), source })
+    decode_checked(open_decoder(path)?, path)
+}
+
+/// Checks the size a decoder's header gives, then decodes behind limits.
+fn decode_checked(mut decoder: impl image::ImageDecoder, path: &Path) -> Result<DynamicImage, WorldError> {
+    let decode = |source| WorldError::Decode { path: path.to_path_buf(), source };
+    let (width, height) = image::ImageDecoder::dimensions(&decoder);
+    if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(WorldError::TooLarge { path: path.to_path_buf(), width, height });
+    }
+    if width == 0 || height == 0 {
+        return Err(WorldError::Empty { path: path.to_path_buf(), width, height });
+    }
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(width);
+    limits.max_image_height = Some(height);
+    limits.max_alloc = Some(image::ImageDecoder::total_bytes(&decoder).saturating_add(64 << 20));
+    image::ImageDecoder::set_limits(&mut decoder, limits).map_err(decode)?;
+    DynamicImage::from_decoder(decoder).map_err(decode)
 }
 
 /// Decodes an image file into 8-bit RGBA. Errors name the file.
@@ -173,6 +242,41 @@ mod tests {
         assert_eq!(SkyFace::Top.point(0.25, 1.0, size), SkyFace::Front.point(0.25, 0.0, size));
         assert_eq!(SkyFace::Top.point(0.0, 0.25, size), SkyFace::Left.point(0.25, 0.0, size));
         assert_eq!(SkyFace::Front.point(0.5, 1.0, size), DVec3::new(0.0, 0.0, -140.0));
+    }
+
+    #[test]
+    fn huge_images_are_refused_from_their_header_with_their_size() {
+        // A BMP header claiming 20000x20000 pixels, 24-bit, and no pixels.
+        let mut bmp = b"BM".to_vec();
+        bmp.extend(54u32.to_le_bytes()); // file size (ignored)
+        bmp.extend([0; 4]);
+        bmp.extend(54u32.to_le_bytes()); // pixel data offset
+        bmp.extend(40u32.to_le_bytes()); // BITMAPINFOHEADER
+        bmp.extend(20_000i32.to_le_bytes());
+        bmp.extend(20_000i32.to_le_bytes());
+        bmp.extend(1u16.to_le_bytes());
+        bmp.extend(24u16.to_le_bytes());
+        bmp.extend([0; 24]);
+        let path = std::env::temp_dir().join(format!("rayterra-huge-{}.bmp", std::process::id()));
+        std::fs::write(&path, &bmp).expect("write");
+        let error = read_image(&path).expect_err("too large").to_string();
+        assert!(error.contains("is 20000x20000 pixels, larger than the 16384 pixels a side"), "{error}");
+        assert_eq!(image_size(&path).ok(), Some((20_000, 20_000)));
+        let error = Heightmap::load(&path).expect_err("too large").to_string();
+        assert!(
+            error.contains("a heightmap may have at most 8193 samples per side, this one is 20000x20000"),
+            "{error}"
+        );
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn empty_images_are_refused() {
+        let path = std::env::temp_dir().join(format!("rayterra-empty-{}.hdr", std::process::id()));
+        std::fs::write(&path, b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 8\n").expect("write");
+        let error = read_image(&path).expect_err("empty");
+        assert!(matches!(error, WorldError::Empty { width: 8, height: 0, .. }), "{error}");
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]

@@ -3,7 +3,6 @@
 
 #![allow(dead_code)] // Each test binary uses a different part of this module.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -24,7 +23,7 @@ pub fn under_ci() -> bool {
 /// terminal: the test harness would swallow `eprintln!` from a test that passes.
 pub fn skip(reason: &str) {
     assert!(!under_ci(), "CI=true, so this cannot be skipped: {reason}");
-    let _ = writeln!(std::io::stderr(), "\n==== SKIPPED: {reason} ====\n");
+    test_skips::skip("terrain tests", reason);
 }
 
 /// The GPU on `backend`, opened once per test binary and shared (the adapter is printed); `None`

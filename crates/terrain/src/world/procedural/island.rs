@@ -14,6 +14,11 @@ const COAST_RADIUS: f64 = 0.70;
 const PEAK_HEIGHT: f64 = 2.15;
 /// Height the summits round off toward, in world units.
 const MAX_HEIGHT: f64 = 2.32;
+/// Width of the rounding of the summits: heights from `MAX_HEIGHT + SUMMIT_ROUNDING` up are all
+/// cut to `MAX_HEIGHT`, flat.
+const SUMMIT_ROUNDING: f64 = 0.12;
+/// Rank of the highest peaks among the map's samples, as a fraction: all but the top 0.05%.
+const PEAK_QUANTILE: f64 = 0.9995;
 
 /// Generates a `size` x `size` island heightmap for `seed`, in grey levels placed with `config`'s
 /// height mapping (the coast is at the level of y = 0). Bit-identical for the same arguments.
@@ -56,27 +61,58 @@ pub fn island_heightmap(seed: u32, size: u32, config: &SceneConfig) -> Result<He
         let mountains = uplift.powf(2.0) * (0.55 + 0.45 * ridge) * smoothstep(0.0, 0.35, inland);
         (base, mountains)
     });
-    // Scale the mountains so that, whatever the seed, the highest peaks (all but the top 0.05% of the map)
-    // reach `PEAK_HEIGHT`: every island gets snow-capped summits and none is cut flat.
-    let mut heights: Vec<f64> = elevations.iter().map(|&(base, mountain)| base + mountain).collect();
-    heights.sort_by(f64::total_cmp);
-    let top = heights.len() * 9995 / 10000;
-    let (base_at_top, mountain_at_top) = elevations
-        .iter()
-        .copied()
-        .find(|&(base, mountain)| base + mountain == heights[top])
-        .unwrap_or((0.0, 1.0));
-    let scale = ((PEAK_HEIGHT - base_at_top) / mountain_at_top.max(1e-3)).clamp(0.0, 10.0);
+    let scale = mountain_scale(&elevations);
     let levels = elevations
         .into_iter()
         .map(|(base, mountain)| {
             let height = base + mountain * scale;
             // Peaks round off just below the top of the height range.
-            let height = -smooth_max(-height, -MAX_HEIGHT, 0.12);
+            let height = -smooth_max(-height, -MAX_HEIGHT, SUMMIT_ROUNDING);
             f64::from(config.level_of_height(height as f32)).clamp(lowest, highest) as f32
         })
         .collect();
     Heightmap::new(size, size, levels)
+}
+
+/// The factor of the mountains that makes, whatever the seed, the highest peaks (all but the top
+/// 0.05% of the map) reach about `PEAK_HEIGHT`: every island gets snow-capped summits and none is
+/// cut flat.
+///
+/// A first estimate takes the sample at that rank of the unscaled heights and scales its
+/// mountain to reach `PEAK_HEIGHT`. Scaling changes the ranking, though: where the mountains are
+/// low at that sample (seed 3), other samples with more mountain and less base rise far past
+/// it, and 1% of seed 3's map was cut flat at `MAX_HEIGHT`. When the estimate lifts more than
+/// the top 0.05% into the flat cut, the factor is found exactly instead, by bisection on the
+/// scaled heights (which rise with the factor, and so does their quantile). Seeds whose estimate
+/// cuts nothing flat keep it, and with it their islands.
+fn mountain_scale(elevations: &[(f64, f64)]) -> f64 {
+    let rank = ((elevations.len() as f64 * PEAK_QUANTILE) as usize).min(elevations.len() - 1);
+    let mut heights: Vec<f64> = elevations.iter().map(|&(base, mountain)| base + mountain).collect();
+    heights.sort_by(f64::total_cmp);
+    let (base_at_top, mountain_at_top) = elevations
+        .iter()
+        .copied()
+        .find(|&(base, mountain)| base + mountain == heights[rank])
+        .unwrap_or((0.0, 1.0));
+    let estimate = ((PEAK_HEIGHT - base_at_top) / mountain_at_top.max(1e-3)).clamp(0.0, 10.0);
+    let quantile = |scale: f64| {
+        let mut scaled: Vec<f64> =
+            elevations.iter().map(|&(base, mountain)| base + mountain * scale).collect();
+        *scaled.select_nth_unstable_by(rank, f64::total_cmp).1
+    };
+    if quantile(estimate) < MAX_HEIGHT + SUMMIT_ROUNDING {
+        return estimate;
+    }
+    let (mut low, mut high) = (0.0, estimate);
+    for _ in 0..48 {
+        let middle = 0.5 * (low + high);
+        if quantile(middle) > PEAK_HEIGHT {
+            high = middle;
+        } else {
+            low = middle;
+        }
+    }
+    low
 }
 
 /// A maximum of `a` and `b` with a rounded corner of width `k` (polynomial smooth maximum).
@@ -118,6 +154,29 @@ mod tests {
             // The centre region holds land that rises well above the shore.
             let highest = levels.iter().copied().fold(f32::MIN, f32::max);
             assert!(config.height_of_level(highest) > 1.0, "seed {seed}: flat island");
+        }
+    }
+
+    #[test]
+    fn no_seed_cuts_its_summits_flat() {
+        // At most the top 0.05% of the map may reach the flat cut at the top of the height
+        // range; seed 3 (the README's example) had 1% of its samples there, 9 and 11 a quarter.
+        let config = SceneConfig::default();
+        let top = config.level_of_height(MAX_HEIGHT as f32);
+        for seed in 1..=12 {
+            let map = island_heightmap(seed, 256, &config).expect("valid size");
+            let flat = map.levels().iter().filter(|&&l| l >= top - 1e-3).count();
+            let fraction = flat as f64 / map.levels().len() as f64;
+            assert!(
+                fraction <= 1.0 - PEAK_QUANTILE,
+                "seed {seed}: {:.3}% of the map is cut flat",
+                100.0 * fraction
+            );
+            let highest = map.levels().iter().copied().fold(f32::MIN, f32::max);
+            assert!(
+                config.height_of_level(highest) > PEAK_HEIGHT as f32 - 0.05,
+                "seed {seed}: no snowy peaks"
+            );
         }
     }
 

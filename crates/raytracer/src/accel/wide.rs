@@ -1,0 +1,725 @@
+//! A 4-wide bounding-volume hierarchy with single-precision boxes: the acceleration structure of
+//! the scene (over its primitives) and of every triangle mesh (over its triangles).
+//!
+//! Layout: a node holds the boxes of its up to four children in structure-of-arrays form (the
+//! four lower x bounds, the four upper x bounds, ...), so one ray tests all four boxes with the
+//! same few vector instructions, and the children's references. A child is another node or a leaf,
+//! a run of consecutive items (at most [`MAX_LEAF`]). A node takes 112 bytes; a tree over `n`
+//! items has about `n / 6` nodes with leaves of four.
+//!
+//! Build: top-down, binned surface-area heuristic over all three axes; each node splits its items
+//! into up to four groups by splitting the group with the largest box again until there are four
+//! (the usual way of collapsing a binary SAH tree into a 4-wide one, done while building); a
+//! group that fits in a leaf becomes one. Large subtrees are built and large groups binned in
+//! parallel; the result does not depend on the thread count.
+//!
+//! Traversal: nearest child first, with a small explicit stack; boxes are rounded outwards when
+//! built and the far distance of a slab test is widened by a few ulps, so no ray slips past a box
+//! it touches (which keeps the watertight triangle test watertight). Items are anything with a
+//! bounding box: the caller tests the items of a leaf and says how far the ray may still go.
+
+use glam::DVec3;
+
+use crate::geometry::{Bounds, Ray};
+
+/// Most items in a leaf.
+pub const MAX_LEAF: usize = 8;
+/// Width of a node.
+pub const WIDTH: usize = 4;
+/// Cost of visiting a node (four box tests) in the SAH, in the units of `BuildParams::item_cost`.
+const NODE_COST: f32 = 1.0;
+/// Number of SAH bins per axis.
+const BINS: usize = 16;
+/// Subtrees of at least this many items are built on another thread.
+const PARALLEL_ITEMS: usize = 16 * 1024;
+/// Most items a tree may hold (leaf references keep 28 bits for the first item).
+pub const MAX_ITEMS: usize = (1 << 28) - 1;
+/// Entries of the traversal stack kept in a fixed array (enough for the paths of trees 10 levels
+/// deep even when every level leaves three children behind); longer paths spill to the heap.
+const STACK: usize = 32;
+
+/// Leaf flag of a child reference: bits 0..28 the first item, bits 28..31 the item count minus 1.
+const LEAF: u32 = 1 << 31;
+/// An unused child slot.
+const EMPTY: u32 = u32::MAX;
+
+/// A node: the boxes of up to four children and what they are.
+#[derive(Clone, Debug)]
+#[repr(C, align(64))]
+pub struct Node {
+    /// Lower bounds per axis (x, y, z), one lane per child. Unused lanes hold an empty box.
+    lo: [[f32; WIDTH]; 3],
+    /// Upper bounds per axis, one lane per child.
+    hi: [[f32; WIDTH]; 3],
+    /// Per child: a node index, a leaf (`LEAF | (count - 1) << 28 | first`), or [`EMPTY`].
+    child: [u32; WIDTH],
+}
+
+/// A box in single precision, rounded outwards from a double-precision box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Box32 {
+    /// Lower corner.
+    pub lo: [f32; 3],
+    /// Upper corner.
+    pub hi: [f32; 3],
+}
+
+impl Box32 {
+    /// The empty box.
+    pub const EMPTY: Box32 = Box32 { lo: [f32::INFINITY; 3], hi: [f32::NEG_INFINITY; 3] };
+
+    /// The smallest single-precision box holding `b` (rounded outwards; infinite coordinates
+    /// stay infinite).
+    pub fn from_bounds(b: &Bounds) -> Box32 {
+        let down = |v: f64| {
+            let f = v as f32;
+            if f as f64 > v { f.next_down() } else { f }
+        };
+        let up = |v: f64| {
+            let f = v as f32;
+            if (f as f64) < v { f.next_up() } else { f }
+        };
+        Box32 {
+            lo: [down(b.min.x), down(b.min.y), down(b.min.z)],
+            hi: [up(b.max.x), up(b.max.y), up(b.max.z)],
+        }
+    }
+
+    /// The box around single-precision points.
+    pub fn around(points: &[[f32; 3]]) -> Box32 {
+        points.iter().fold(Box32::EMPTY, |b, p| b.include(*p))
+    }
+
+    /// This box grown to hold `p`.
+    #[inline]
+    pub fn include(self, p: [f32; 3]) -> Box32 {
+        Box32 {
+            lo: [self.lo[0].min(p[0]), self.lo[1].min(p[1]), self.lo[2].min(p[2])],
+            hi: [self.hi[0].max(p[0]), self.hi[1].max(p[1]), self.hi[2].max(p[2])],
+        }
+    }
+
+    /// The smallest box holding both.
+    #[inline]
+    pub fn union(self, o: Box32) -> Box32 {
+        Box32 {
+            lo: [self.lo[0].min(o.lo[0]), self.lo[1].min(o.lo[1]), self.lo[2].min(o.lo[2])],
+            hi: [self.hi[0].max(o.hi[0]), self.hi[1].max(o.hi[1]), self.hi[2].max(o.hi[2])],
+        }
+    }
+
+    /// Half the surface area (the SAH only needs relative areas); 0 for an empty box.
+    #[inline]
+    fn half_area(&self) -> f32 {
+        let d = [
+            (self.hi[0] - self.lo[0]).max(0.0),
+            (self.hi[1] - self.lo[1]).max(0.0),
+            (self.hi[2] - self.lo[2]).max(0.0),
+        ];
+        let a = d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+        if a.is_finite() { a } else { f32::MAX }
+    }
+
+    /// Twice the centre (the SAH bins centroids; the factor 2 does not matter).
+    #[inline]
+    fn centre2(&self) -> [f32; 3] {
+        let c = |i: usize| {
+            let s = self.lo[i] + self.hi[i];
+            if s.is_finite() { s } else { 0.0 }
+        };
+        [c(0), c(1), c(2)]
+    }
+
+    /// The box in double precision.
+    pub fn to_bounds(self) -> Bounds {
+        Bounds {
+            min: DVec3::new(self.lo[0] as f64, self.lo[1] as f64, self.lo[2] as f64),
+            max: DVec3::new(self.hi[0] as f64, self.hi[1] as f64, self.hi[2] as f64),
+        }
+    }
+}
+
+/// A ray prepared for box tests in single precision.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRay {
+    /// Origin.
+    pub origin: [f32; 3],
+    /// Component-wise inverse of the direction (zero components replaced by a tiny value of the
+    /// same sign, so no test produces NaN).
+    pub inv_dir: [f32; 3],
+    /// `inv_dir` widened by a few ulps (see [`FAR_SCALE`]), for the far distance of slab tests.
+    pub inv_dir_far: [f32; 3],
+    /// Whether each direction component is negative (the near face is then the upper one).
+    pub negative: [bool; 3],
+}
+
+impl BoxRay {
+    /// The box-test form of a double-precision ray.
+    #[inline]
+    pub fn new(ray: &Ray) -> BoxRay {
+        BoxRay::from_f32(
+            [ray.origin.x as f32, ray.origin.y as f32, ray.origin.z as f32],
+            [ray.dir.x as f32, ray.dir.y as f32, ray.dir.z as f32],
+        )
+    }
+
+    /// The box-test form of a single-precision ray.
+    #[inline]
+    pub fn from_f32(origin: [f32; 3], dir: [f32; 3]) -> BoxRay {
+        let inv = |d: f32| {
+            let d = if d.abs() < 1e-30 { if d.is_sign_negative() { -1e-30 } else { 1e-30 } } else { d };
+            1.0 / d
+        };
+        let inv_dir = [inv(dir[0]), inv(dir[1]), inv(dir[2])];
+        BoxRay {
+            origin,
+            inv_dir,
+            inv_dir_far: inv_dir.map(|i| i * FAR_SCALE),
+            negative: [inv_dir[0] < 0.0, inv_dir[1] < 0.0, inv_dir[2] < 0.0],
+        }
+    }
+}
+
+/// Widening of the far distance of a slab test: a few ulps, so a box that the ray touches in exact
+/// arithmetic is never missed through rounding (pbrt's `1 + 2 gamma(3)`).
+const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// The entry distance of the ray into each of the node's four boxes, or infinity where the ray
+/// misses the box within `[0, t_max]`.
+#[inline(always)]
+fn node_distances(node: &Node, ray: &BoxRay, t_max: f32) -> [f32; WIDTH] {
+    let mut near = [0.0f32; WIDTH];
+    let mut far = [t_max; WIDTH];
+    for axis in 0..3 {
+        let (n, f) = if ray.negative[axis] {
+            (&node.hi[axis], &node.lo[axis])
+        } else {
+            (&node.lo[axis], &node.hi[axis])
+        };
+        let o = ray.origin[axis];
+        let inv = ray.inv_dir[axis];
+        let inv_far = ray.inv_dir_far[axis];
+        for lane in 0..WIDTH {
+            let tn = (n[lane] - o) * inv;
+            let tf = (f[lane] - o) * inv_far;
+            near[lane] = if tn > near[lane] { tn } else { near[lane] };
+            far[lane] = if tf < far[lane] { tf } else { far[lane] };
+        }
+    }
+    let mut out = [f32::INFINITY; WIDTH];
+    for lane in 0..WIDTH {
+        out[lane] = if near[lane] <= far[lane] { near[lane] } else { f32::INFINITY };
+    }
+    out
+}
+
+/// A 4-wide BVH over items `0..n`; leaves hold runs of [`WideBvh::order`].
+#[derive(Clone, Debug, Default)]
+pub struct WideBvh {
+    nodes: Vec<Node>,
+    /// The items in leaf order: leaf `(first, count)` holds `order[first..first + count]`.
+    order: Vec<u32>,
+    /// The root: a node, a leaf, or [`EMPTY`].
+    root: u32,
+    /// The box around everything.
+    bounds: Option<Box32>,
+}
+
+/// One item for the builder.
+#[derive(Clone, Copy)]
+struct BuildItem {
+    bounds: Box32,
+    centre: [f32; 3],
+    index: u32,
+}
+
+/// A finished subtree: its box and the reference to it.
+#[derive(Clone, Copy)]
+struct Built {
+    bounds: Box32,
+    reference: u32,
+}
+
+/// Settings of a build.
+#[derive(Clone, Copy, Debug)]
+pub struct BuildParams {
+    /// Items a leaf may hold at most (1..=[`MAX_LEAF`]).
+    pub max_leaf: usize,
+    /// Cost of testing one item, relative to testing one node's four boxes.
+    pub item_cost: f32,
+    /// Leaves are sized in multiples of this (a mesh tests triangles four at a time, so a leaf of
+    /// one to four costs the same).
+    pub leaf_granularity: usize,
+}
+
+impl BuildParams {
+    /// Scene primitives: items of unequal and larger cost (spheres, cylinders, meshes).
+    pub const SHAPES: BuildParams = BuildParams { max_leaf: 4, item_cost: 1.0, leaf_granularity: 1 };
+    /// Triangles of a mesh, tested four at a time.
+    pub const TRIANGLES: BuildParams = BuildParams { max_leaf: 8, item_cost: 0.5, leaf_granularity: 4 };
+}
+
+impl WideBvh {
+    /// Builds the tree over items `0..boxes.len()` with the given boxes. Items with an empty or
+    /// non-finite box are left out. At most [`MAX_ITEMS`] items.
+    pub fn build(boxes: &[Box32], params: BuildParams) -> WideBvh {
+        assert!(boxes.len() <= MAX_ITEMS, "too many items for one BVH");
+        let mut items: Vec<BuildItem> = boxes
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| {
+                (0..3).all(|a| b.lo[a] <= b.hi[a]) && !b.lo.iter().chain(&b.hi).any(|v| v.is_nan())
+            })
+            .map(|(i, b)| BuildItem { bounds: *b, centre: b.centre2(), index: i as u32 })
+            .collect();
+        let mut bvh = WideBvh { nodes: Vec::new(), order: Vec::new(), root: EMPTY, bounds: None };
+        if items.is_empty() {
+            return bvh;
+        }
+        let params = BuildParams { max_leaf: params.max_leaf.clamp(1, MAX_LEAF), ..params };
+        let mut nodes = Vec::with_capacity(items.len() / 3 + 1);
+        let bounds = items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+        let root = build_subtree(&mut items, 0, bounds, &mut nodes, params);
+        bvh.order = items.iter().map(|it| it.index).collect();
+        bvh.nodes = nodes;
+        bvh.root = root.reference;
+        bvh.bounds = Some(root.bounds);
+        bvh
+    }
+
+    /// The items in leaf order (leaf references index into it).
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// The box around all items, if there are any.
+    pub fn bounds(&self) -> Option<Box32> {
+        self.bounds
+    }
+
+    /// Bytes taken by the nodes and the item order.
+    pub fn memory(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node>() + self.order.len() * 4
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Every leaf as `(first, count)` into [`WideBvh::order`], in order.
+    pub fn leaves(&self) -> Vec<(u32, u32)> {
+        let mut out = Vec::new();
+        let mut stack = vec![self.root];
+        while let Some(r) = stack.pop() {
+            if r == EMPTY {
+                continue;
+            }
+            if r & LEAF != 0 {
+                out.push(leaf_range(r));
+            } else {
+                stack.extend(self.nodes[r as usize].child.iter().rev());
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// Rewrites every leaf `(first, count)` as `remap(first, count)` (at most [`MAX_LEAF`]
+    /// entries), for owners that store their items in other units (a mesh's packets of four
+    /// triangles). The item order is dropped: the owner keeps its own.
+    pub fn remap_leaves(&mut self, mut remap: impl FnMut(u32, u32) -> (u32, u32)) {
+        let fix = |r: &mut u32, remap: &mut dyn FnMut(u32, u32) -> (u32, u32)| {
+            if *r != EMPTY && *r & LEAF != 0 {
+                let (first, count) = leaf_range(*r);
+                let (first, count) = remap(first, count);
+                *r = leaf_reference(first, count);
+            }
+        };
+        fix(&mut self.root, &mut remap);
+        for node in &mut self.nodes {
+            for c in &mut node.child {
+                fix(c, &mut remap);
+            }
+        }
+        self.order = Vec::new();
+    }
+
+    /// Visits the leaves the ray's segment `[0, t_max]` enters, nearest box first.
+    /// `leaf(first, count, t_max)` tests the leaf's items and returns how far the ray may still
+    /// go (its argument, or the distance of a nearer hit); returning a negative number stops the
+    /// traversal (used by occlusion queries).
+    #[inline]
+    pub fn traverse(&self, ray: &BoxRay, mut t_max: f32, mut leaf: impl FnMut(u32, u32, f32) -> f32) {
+        if self.root == EMPTY {
+            return;
+        }
+        let mut stack = Stack::new();
+        let mut current = self.root;
+        loop {
+            if current & LEAF != 0 {
+                let (first, count) = leaf_range(current);
+                t_max = leaf(first, count, t_max);
+                if t_max < 0.0 {
+                    return;
+                }
+            } else {
+                let node = &self.nodes[current as usize];
+                let dist = node_distances(node, ray, t_max);
+                let mut mask = 0u32;
+                for (lane, d) in dist.iter().enumerate() {
+                    mask |= ((*d < f32::INFINITY) as u32) << lane;
+                }
+                // The common cases first: one child hit, or two.
+                if mask != 0 {
+                    let a = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        current = node.child[a];
+                        continue;
+                    }
+                    let b = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        let (near, far) = if dist[a] <= dist[b] { (a, b) } else { (b, a) };
+                        stack.push((node.child[far], dist[far]));
+                        current = node.child[near];
+                        continue;
+                    }
+                    // Three or four: sort them, push all but the nearest (farthest first).
+                    let mut hits = [(0u32, f32::INFINITY); WIDTH];
+                    let mut n = 0;
+                    mask |= 1 << a | 1 << b;
+                    while mask != 0 {
+                        let lane = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let entry = (node.child[lane], dist[lane]);
+                        let mut j = n;
+                        while j > 0 && hits[j - 1].1 < entry.1 {
+                            hits[j] = hits[j - 1];
+                            j -= 1;
+                        }
+                        hits[j] = entry;
+                        n += 1;
+                    }
+                    for &h in &hits[..n - 1] {
+                        stack.push(h);
+                    }
+                    current = hits[n - 1].0;
+                    continue;
+                }
+            }
+            // Pop the next subtree that is still within reach.
+            loop {
+                match stack.pop() {
+                    None => return,
+                    Some((r, d)) if d <= t_max => {
+                        current = r;
+                        break;
+                    }
+                    Some(_) => {}
+                }
+            }
+        }
+    }
+}
+
+/// The traversal stack: a fixed array, spilling to the heap in the (degenerate) case of a tree
+/// deeper than it holds.
+struct Stack {
+    fixed: [(u32, f32); STACK],
+    top: usize,
+    spill: Vec<(u32, f32)>,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Stack {
+        Stack { fixed: [(0, 0.0); STACK], top: 0, spill: Vec::new() }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, entry: (u32, f32)) {
+        if self.top < STACK {
+            self.fixed[self.top] = entry;
+            self.top += 1;
+        } else {
+            self.spill.push(entry);
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        if let Some(e) = self.spill.pop() {
+            return Some(e);
+        }
+        if self.top == 0 {
+            return None;
+        }
+        self.top -= 1;
+        Some(self.fixed[self.top])
+    }
+}
+
+#[inline]
+fn leaf_range(r: u32) -> (u32, u32) {
+    (r & ((1 << 28) - 1), ((r >> 28) & 7) + 1)
+}
+
+#[inline]
+fn leaf_reference(first: u32, count: u32) -> u32 {
+    debug_assert!((1..=MAX_LEAF as u32).contains(&count) && first < (1 << 28));
+    LEAF | (count - 1) << 28 | first
+}
+
+/// Builds the subtree over `items` (whose first item is item `offset` of the whole order, and
+/// whose box is `bounds`) and appends its nodes to `nodes`; returns its box and reference.
+fn build_subtree(
+    items: &mut [BuildItem],
+    offset: usize,
+    bounds: Box32,
+    nodes: &mut Vec<Node>,
+    params: BuildParams,
+) -> Built {
+    if items.len() <= params.max_leaf {
+        return Built { bounds, reference: leaf_reference(offset as u32, items.len() as u32) };
+    }
+    // Split into up to four groups: split the group with the largest box until there are four
+    // (groups small enough for a leaf that the SAH keeps whole are not split).
+    let mut groups: Vec<(usize, usize, Box32)> = vec![(0, items.len(), bounds)];
+    while groups.len() < WIDTH {
+        let candidate = groups
+            .iter()
+            .enumerate()
+            .filter(|(_, (s, e, _))| e - s > params.max_leaf)
+            .max_by(|a, b| a.1.2.half_area().total_cmp(&b.1.2.half_area()))
+            .map(|(i, _)| i);
+        let Some(g) = candidate else { break };
+        let (s, e, group_bounds) = groups[g];
+        let (count, left, right) = split(&mut items[s..e], &group_bounds, params);
+        let mid = s + count;
+        groups[g] = (s, mid, left);
+        groups.insert(g + 1, (mid, e, right));
+    }
+    let node_index = nodes.len();
+    nodes.push(Node {
+        lo: [[f32::INFINITY; WIDTH]; 3],
+        hi: [[f32::NEG_INFINITY; WIDTH]; 3],
+        child: [EMPTY; WIDTH],
+    });
+    // Build the children; big ones in parallel (each into its own node list, appended after).
+    let mut children: Vec<Built> = Vec::with_capacity(WIDTH);
+    let big = items.len() >= PARALLEL_ITEMS;
+    let mut slices: Vec<(usize, Box32, &mut [BuildItem])> = Vec::with_capacity(WIDTH);
+    let mut rest: &mut [BuildItem] = items;
+    let mut consumed = 0;
+    for &(s, e, b) in &groups {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(e - consumed);
+        debug_assert_eq!(s, consumed);
+        slices.push((offset + s, b, head));
+        rest = tail;
+        consumed = e;
+    }
+    if big {
+        use rayon::prelude::*;
+        let parts: Vec<(Built, Vec<Node>)> = slices
+            .into_par_iter()
+            .map(|(off, b, slice)| {
+                let mut local = Vec::new();
+                let built = build_subtree(slice, off, b, &mut local, params);
+                (built, local)
+            })
+            .collect();
+        for (built, local) in parts {
+            let base = nodes.len() as u32;
+            let shift = |r: u32| if r != EMPTY && r & LEAF == 0 { r + base } else { r };
+            nodes.extend(local.into_iter().map(|mut n| {
+                for c in &mut n.child {
+                    *c = shift(*c);
+                }
+                n
+            }));
+            children.push(Built { bounds: built.bounds, reference: shift(built.reference) });
+        }
+    } else {
+        for (off, b, slice) in slices {
+            children.push(build_subtree(slice, off, b, nodes, params));
+        }
+    }
+    let node = &mut nodes[node_index];
+    for (lane, c) in children.iter().enumerate() {
+        for axis in 0..3 {
+            node.lo[axis][lane] = c.bounds.lo[axis];
+            node.hi[axis][lane] = c.bounds.hi[axis];
+        }
+        node.child[lane] = c.reference;
+    }
+    Built { bounds, reference: node_index as u32 }
+}
+
+/// The SAH cost of a leaf of `n` items, relative to the box's area.
+fn leaf_cost(n: usize, params: BuildParams) -> f32 {
+    let g = params.leaf_granularity.max(1);
+    (n.div_ceil(g) * g) as f32 * params.item_cost
+}
+
+/// The best binned SAH split found: its cost relative to the box's area, the axis, the last bin
+/// of the left part, and the boxes of both parts.
+#[derive(Clone, Copy)]
+struct Split {
+    cost: f32,
+    axis: usize,
+    bin: usize,
+    centroid_lo: f32,
+    scale: f32,
+    left: Box32,
+    right: Box32,
+}
+
+impl Split {
+    #[inline]
+    fn goes_left(&self, it: &BuildItem) -> bool {
+        (((it.centre[self.axis] - self.centroid_lo) * self.scale) as usize).min(BINS - 1) <= self.bin
+    }
+}
+
+/// Item boxes and counts per bin, on each axis.
+#[derive(Clone, Copy)]
+struct Bins {
+    boxes: [[Box32; BINS]; 3],
+    counts: [[u32; BINS]; 3],
+}
+
+impl Bins {
+    /// Bins `items` on all three axes in one pass, the centroid box being `lo + [0, BINS) / scale`.
+    fn of(items: &[BuildItem], lo: [f32; 3], scale: [f32; 3]) -> Bins {
+        if items.len() >= PARALLEL_ITEMS {
+            use rayon::prelude::*;
+            return items
+                .par_chunks(PARALLEL_ITEMS / 4)
+                .map(|c| Bins::of(c, lo, scale))
+                .reduce_with(Bins::merge)
+                .unwrap_or_else(Bins::empty);
+        }
+        let mut bins = Bins::empty();
+        for it in items {
+            for axis in 0..3 {
+                let b = (((it.centre[axis] - lo[axis]) * scale[axis]) as usize).min(BINS - 1);
+                bins.boxes[axis][b] = bins.boxes[axis][b].union(it.bounds);
+                bins.counts[axis][b] += 1;
+            }
+        }
+        bins
+    }
+
+    fn empty() -> Bins {
+        Bins { boxes: [[Box32::EMPTY; BINS]; 3], counts: [[0; BINS]; 3] }
+    }
+
+    fn merge(mut self, o: Bins) -> Bins {
+        for axis in 0..3 {
+            for b in 0..BINS {
+                self.boxes[axis][b] = self.boxes[axis][b].union(o.boxes[axis][b]);
+                self.counts[axis][b] += o.counts[axis][b];
+            }
+        }
+        self
+    }
+}
+
+/// The box around the items' centres (doubled, as [`Box32::centre2`] keeps them).
+fn centroid_bounds(items: &[BuildItem]) -> Box32 {
+    if items.len() >= PARALLEL_ITEMS {
+        use rayon::prelude::*;
+        return items
+            .par_chunks(PARALLEL_ITEMS / 4)
+            .map(centroid_bounds)
+            .reduce_with(Box32::union)
+            .unwrap_or(Box32::EMPTY);
+    }
+    items.iter().fold(Box32::EMPTY, |b, it| b.include(it.centre))
+}
+
+/// The best binned SAH split of `items` over all three axes, if the items' centres are not all
+/// in one place.
+fn sah_split(items: &[BuildItem], bounds: &Box32, params: BuildParams) -> Option<Split> {
+    let cb = centroid_bounds(items);
+    let area = bounds.half_area().max(f32::MIN_POSITIVE);
+    let scale: [f32; 3] = std::array::from_fn(|axis| {
+        let extent = cb.hi[axis] - cb.lo[axis];
+        if extent > 0.0 { BINS as f32 / extent } else { 0.0 }
+    });
+    if scale.iter().all(|&s| s == 0.0 || !s.is_finite()) {
+        return None;
+    }
+    let bins = Bins::of(items, cb.lo, scale);
+    let mut best: Option<Split> = None;
+    for (axis, &axis_scale) in scale.iter().enumerate() {
+        if axis_scale == 0.0 || !axis_scale.is_finite() {
+            continue;
+        }
+        let (boxes, counts) = (&bins.boxes[axis], &bins.counts[axis]);
+        // Sweep from the right, then from the left.
+        let mut right_box = [Box32::EMPTY; BINS];
+        let mut right_n = [0usize; BINS];
+        let (mut acc, mut n) = (Box32::EMPTY, 0);
+        for b in (1..BINS).rev() {
+            acc = acc.union(boxes[b]);
+            n += counts[b] as usize;
+            right_box[b] = acc;
+            right_n[b] = n;
+        }
+        let (mut acc, mut n) = (Box32::EMPTY, 0);
+        for b in 0..BINS - 1 {
+            acc = acc.union(boxes[b]);
+            n += counts[b] as usize;
+            let nr = right_n[b + 1];
+            if n == 0 || nr == 0 {
+                continue;
+            }
+            let cost = NODE_COST
+                + (leaf_cost(n, params) * acc.half_area()
+                    + leaf_cost(nr, params) * right_box[b + 1].half_area())
+                    / area;
+            if best.is_none_or(|s| cost < s.cost) {
+                best = Some(Split {
+                    cost,
+                    axis,
+                    bin: b,
+                    centroid_lo: cb.lo[axis],
+                    scale: axis_scale,
+                    left: acc,
+                    right: right_box[b + 1],
+                });
+            }
+        }
+    }
+    best
+}
+
+/// Splits `items` (with box `bounds`) in two, reordering them; returns the size of the first
+/// part, in `1..len`, and the boxes of both parts.
+fn split(items: &mut [BuildItem], bounds: &Box32, params: BuildParams) -> (usize, Box32, Box32) {
+    let n = items.len();
+    if let Some(best) = sah_split(items, bounds, params) {
+        let mut first = 0;
+        for i in 0..n {
+            if best.goes_left(&items[i]) {
+                items.swap(first, i);
+                first += 1;
+            }
+        }
+        if first > 0 && first < n {
+            return (first, best.left, best.right);
+        }
+    }
+    // All centroids coincide (or binning could not separate them): split in the middle of the
+    // longest axis's order.
+    let cb = centroid_bounds(items);
+    let axis = (0..3).max_by(|&a, &b| (cb.hi[a] - cb.lo[a]).total_cmp(&(cb.hi[b] - cb.lo[b]))).unwrap_or(0);
+    let mid = n / 2;
+    items.select_nth_unstable_by(mid, |a, b| a.centre[axis].total_cmp(&b.centre[axis]));
+    let left = items[..mid].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+    let right = items[mid..].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
+    (mid, left, right)
+}

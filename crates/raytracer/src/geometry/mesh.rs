@@ -1,0 +1,570 @@
+//! Triangle meshes (`primitive mesh`, `primitive polyhedron`): vertices in single precision,
+//! their own 4-wide BVH, and triangles tested four at a time with the watertight test.
+//!
+//! A mesh is one primitive of the scene (one material): the scene's BVH holds it as one item and
+//! its own BVH holds its triangles (a two-level hierarchy without transforms, as the vertices are
+//! already in world space). A mesh file with several `usemtl` materials becomes one primitive per
+//! material, sharing the vertex arrays.
+//!
+//! Storage per triangle: its vertex indices (12 bytes, plus 12 for separate normal or texture
+//! indices when the file has them), its corners in the leaf-ordered packets of the BVH (40 bytes)
+//! and its share of the BVH nodes (about 20 bytes); vertices take 12 bytes for the position and
+//! 12 for the normal (8 for texture coordinates).
+//!
+//! Precision: single-precision vertices and tests, as in Embree; the hit point is recomputed in
+//! double precision from the barycentric weights (so it lies on the triangle's plane), and rays
+//! leaving a mesh start [`MESH_ERROR_SCALE`] times farther off the surface than rays leaving the
+//! double-precision shapes.
+
+use std::sync::Arc;
+
+use glam::{DVec3, Vec3};
+
+use super::{Bounds, Ray, ShapeHit, ShapePart};
+use crate::accel::Box32;
+use crate::accel::wide::{BoxRay, BuildParams, WideBvh};
+
+/// How much larger the rounding error of a single-precision mesh hit is than that of a
+/// double-precision shape, relative to the magnitude of the coordinates: secondary rays leaving a
+/// mesh start `SPAWN_OFFSET * MESH_ERROR_SCALE` (1e-5) times the magnitude off the surface, about
+/// 80 single-precision ulps.
+pub const MESH_ERROR_SCALE: f64 = 1e4;
+
+/// No index (a triangle without normal or texture indices).
+const NONE: u32 = u32::MAX;
+
+/// The vertex data of a mesh file, in world space, shared by its parts.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshVertices {
+    /// Positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit vertex normals (from the file, or averaged over the faces around each position).
+    pub normals: Vec<[f32; 3]>,
+    /// Texture coordinates `(s, t)` as the file gives them (`vt`): `s` across, `t` up.
+    pub uvs: Vec<[f32; 2]>,
+}
+
+/// The corners of one triangle: indices into the positions, normals and texture coordinates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TriangleIndices {
+    /// Position indices.
+    pub position: [u32; 3],
+    /// Normal indices, or `u32::MAX` for none (the face normal is used).
+    pub normal: [u32; 3],
+    /// Texture coordinate indices, or `u32::MAX` for none (the barycentric coordinates are used).
+    pub uv: [u32; 3],
+}
+
+impl TriangleIndices {
+    /// A triangle with positions only.
+    pub fn positions(position: [u32; 3]) -> TriangleIndices {
+        TriangleIndices { position, normal: [NONE; 3], uv: [NONE; 3] }
+    }
+}
+
+/// Four triangles' corners, in structure-of-arrays form: `v[corner][axis][lane]`.
+#[derive(Clone, Debug)]
+#[repr(C, align(16))]
+struct Packet {
+    v: [[[f32; 4]; 3]; 3],
+    /// The triangles' indices; `u32::MAX` in unused lanes.
+    id: [u32; 4],
+}
+
+/// A triangle mesh ready for rays.
+#[derive(Clone, Debug)]
+pub struct TriangleMesh {
+    vertices: Arc<MeshVertices>,
+    /// Position indices of each triangle.
+    positions: Vec<[u32; 3]>,
+    /// Normal indices of each triangle; empty when they equal the position indices.
+    normals: Vec<[u32; 3]>,
+    /// Texture coordinate indices of each triangle; empty when they equal the position indices.
+    uvs: Vec<[u32; 3]>,
+    packets: Vec<Packet>,
+    bvh: WideBvh,
+    bounds: Bounds,
+    magnitude: f64,
+}
+
+impl PartialEq for TriangleMesh {
+    /// Meshes are equal when they are the same mesh.
+    fn eq(&self, other: &TriangleMesh) -> bool {
+        std::ptr::eq(self, other)
+    }
+}
+
+/// A ray prepared for a mesh: the box-test form and the frame of the watertight test, in single
+/// precision.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshRay {
+    /// The ray for box tests.
+    pub boxes: BoxRay,
+    k: [usize; 3],
+    shear: [f32; 3],
+    origin: [f32; 3],
+}
+
+impl MeshRay {
+    /// The single-precision form of `ray`.
+    #[inline]
+    pub fn new(ray: &Ray) -> MeshRay {
+        let origin = [ray.origin.x as f32, ray.origin.y as f32, ray.origin.z as f32];
+        let dir = [ray.dir.x as f32, ray.dir.y as f32, ray.dir.z as f32];
+        MeshRay::from_f32(origin, dir)
+    }
+
+    /// A ray from single-precision numbers (the direction need not be a unit vector: distances
+    /// are then in units of its length).
+    #[inline]
+    pub fn from_f32(origin: [f32; 3], dir: [f32; 3]) -> MeshRay {
+        let [kx, ky, kz] = super::triangle::axis_permutation(dir.map(f64::from));
+        MeshRay {
+            boxes: BoxRay::from_f32(origin, dir),
+            k: [kx, ky, kz],
+            shear: [dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]],
+            origin,
+        }
+    }
+}
+
+/// The nearest hit in a packet closer than `t_max`: `(lane, t, b1, b2)`.
+#[inline(always)]
+fn packet_hit(p: &Packet, r: &MeshRay, t_max: f32) -> Option<(usize, f32, f32, f32)> {
+    let [kx, ky, kz] = r.k;
+    let [sx, sy, sz] = r.shear;
+    let (ox, oy, oz) = (r.origin[kx], r.origin[ky], r.origin[kz]);
+    // Corners relative to the origin, sheared: x' = x - sx z, y' = y - sy z.
+    let mut x = [[0.0f32; 4]; 3];
+    let mut y = [[0.0f32; 4]; 3];
+    let mut z = [[0.0f32; 4]; 3];
+    for c in 0..3 {
+        for l in 0..4 {
+            let cz = p.v[c][kz][l] - oz;
+            x[c][l] = (p.v[c][kx][l] - ox) - sx * cz;
+            y[c][l] = (p.v[c][ky][l] - oy) - sy * cz;
+            z[c][l] = sz * cz;
+        }
+    }
+    let mut u = [0.0f32; 4];
+    let mut v = [0.0f32; 4];
+    let mut w = [0.0f32; 4];
+    for l in 0..4 {
+        u[l] = x[2][l] * y[1][l] - y[2][l] * x[1][l];
+        v[l] = x[0][l] * y[2][l] - y[0][l] * x[2][l];
+        w[l] = x[1][l] * y[0][l] - y[1][l] * x[0][l];
+    }
+    let mut best: Option<(usize, f32, f32, f32)> = None;
+    let mut limit = t_max;
+    for l in 0..4 {
+        if p.id[l] == NONE {
+            continue;
+        }
+        let (mut ul, mut vl, mut wl) = (u[l], v[l], w[l]);
+        if ul == 0.0 || vl == 0.0 || wl == 0.0 {
+            // On an edge in single precision: decide in double precision, where the products of
+            // single-precision numbers are exact (Woop et al.'s fallback).
+            let (x0, y0, x1, y1, x2, y2) = (
+                x[0][l] as f64,
+                y[0][l] as f64,
+                x[1][l] as f64,
+                y[1][l] as f64,
+                x[2][l] as f64,
+                y[2][l] as f64,
+            );
+            ul = (x2 * y1 - y2 * x1) as f32;
+            vl = (x0 * y2 - y0 * x2) as f32;
+            wl = (x1 * y0 - y1 * x0) as f32;
+        }
+        if (ul < 0.0 || vl < 0.0 || wl < 0.0) && (ul > 0.0 || vl > 0.0 || wl > 0.0) {
+            continue;
+        }
+        let det = ul + vl + wl;
+        if det == 0.0 {
+            continue;
+        }
+        let t_scaled = ul * z[0][l] + vl * z[1][l] + wl * z[2][l];
+        let outside = if det < 0.0 {
+            t_scaled >= 0.0 || t_scaled < limit * det
+        } else {
+            t_scaled <= 0.0 || t_scaled > limit * det
+        };
+        if outside {
+            continue;
+        }
+        let inv = 1.0 / det;
+        let t = t_scaled * inv;
+        if t < limit {
+            limit = t;
+            best = Some((l, t, vl * inv, wl * inv));
+        }
+    }
+    best
+}
+
+impl TriangleMesh {
+    /// Builds the mesh over `triangles` of `vertices`. Triangles with an index out of range or
+    /// with no area are dropped (the loader reports them). Vertex normals are computed when the
+    /// data has none.
+    pub fn new(vertices: Arc<MeshVertices>, triangles: &[TriangleIndices]) -> TriangleMesh {
+        let pos = &vertices.positions;
+        let valid = |t: &&TriangleIndices| {
+            t.position.iter().all(|&i| (i as usize) < pos.len())
+                && t.normal.iter().all(|&i| i == NONE || (i as usize) < vertices.normals.len())
+                && t.uv.iter().all(|&i| i == NONE || (i as usize) < vertices.uvs.len())
+        };
+        let tris: Vec<&TriangleIndices> = triangles.iter().filter(valid).collect();
+        let positions: Vec<[u32; 3]> = tris.iter().map(|t| t.position).collect();
+        let normals: Vec<[u32; 3]> = if tris.iter().all(|t| t.normal == t.position) {
+            Vec::new()
+        } else {
+            tris.iter().map(|t| t.normal).collect()
+        };
+        let uvs: Vec<[u32; 3]> = if tris.iter().all(|t| t.uv == t.position) {
+            Vec::new()
+        } else {
+            tris.iter().map(|t| t.uv).collect()
+        };
+        let boxes: Vec<Box32> = positions
+            .iter()
+            .map(|t| {
+                let b = Box32::around(&[pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]]);
+                if corners_degenerate(pos, t) { Box32::EMPTY } else { b }
+            })
+            .collect();
+        let mut bvh = WideBvh::build(&boxes, BuildParams::TRIANGLES);
+        // Pack each leaf's triangles into packets of four, in leaf order.
+        let order = bvh.order().to_vec();
+        let mut packets = Vec::with_capacity(order.len() / 3 + 1);
+        let mut packet_of_leaf = Vec::new();
+        for (first, count) in bvh.leaves() {
+            let start = packets.len() as u32;
+            for chunk in order[first as usize..(first + count) as usize].chunks(4) {
+                let mut p = Packet { v: [[[0.0; 4]; 3]; 3], id: [NONE; 4] };
+                for (lane, &tri) in chunk.iter().enumerate() {
+                    for (corner, &vertex) in p.v.iter_mut().zip(&positions[tri as usize]) {
+                        for (axis, value) in corner.iter_mut().zip(pos[vertex as usize]) {
+                            axis[lane] = value;
+                        }
+                    }
+                    p.id[lane] = tri;
+                }
+                packets.push(p);
+            }
+            packet_of_leaf.push((first, start, packets.len() as u32 - start));
+        }
+        bvh.remap_leaves(|first, _| {
+            let i = packet_of_leaf.partition_point(|&(f, _, _)| f < first);
+            let (_, start, count) = packet_of_leaf[i];
+            (start, count)
+        });
+        let bounds = bvh.bounds().map_or(Bounds::EMPTY, Box32::to_bounds);
+        let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element().max(0.0);
+        TriangleMesh { vertices, positions, normals, uvs, packets, bvh, bounds, magnitude }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Whether the mesh has no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// The shared vertex data.
+    pub fn vertices(&self) -> &MeshVertices {
+        &self.vertices
+    }
+
+    /// Bytes of the triangles' indices, packets and BVH (not the shared vertex data).
+    pub fn memory(&self) -> usize {
+        (self.positions.len() + self.normals.len() + self.uvs.len()) * 12
+            + self.packets.len() * std::mem::size_of::<Packet>()
+            + self.bvh.memory()
+    }
+
+    /// The nearest hit with `0 < t < t_max` (`t_max` may be infinite).
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f64) -> Option<ShapeHit> {
+        let mray = MeshRay::new(ray);
+        let (index, t, b1, b2) = self.intersect_f32(&mray, t_max as f32)?;
+        Some(ShapeHit { t: t as f64, part: ShapePart::Triangle { index, b1, b2 } })
+    }
+
+    /// The nearest hit of a single-precision ray closer than `t_max`: `(triangle, t, b1, b2)`.
+    #[inline]
+    pub fn intersect_f32(&self, ray: &MeshRay, t_max: f32) -> Option<(u32, f32, f32, f32)> {
+        let mut best = None;
+        self.bvh.traverse(&ray.boxes, t_max, |first, count, limit| {
+            let mut limit = limit;
+            for p in &self.packets[first as usize..(first + count) as usize] {
+                if let Some((lane, t, b1, b2)) = packet_hit(p, ray, limit) {
+                    limit = t;
+                    best = Some((p.id[lane], t, b1, b2));
+                }
+            }
+            limit
+        });
+        best
+    }
+
+    /// Whether any triangle lies on the ray closer than `t_max`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
+        self.occluded_f32(&MeshRay::new(ray), t_max as f32)
+    }
+
+    /// Whether any triangle lies on a single-precision ray closer than `t_max`.
+    #[inline]
+    pub fn occluded_f32(&self, ray: &MeshRay, t_max: f32) -> bool {
+        let mut found = false;
+        self.bvh.traverse(&ray.boxes, t_max, |first, count, limit| {
+            for p in &self.packets[first as usize..(first + count) as usize] {
+                if packet_hit(p, ray, limit).is_some() {
+                    found = true;
+                    return -1.0;
+                }
+            }
+            limit
+        });
+        found
+    }
+
+    /// The corners of triangle `index` in double precision.
+    #[inline]
+    pub fn corners(&self, index: u32) -> [DVec3; 3] {
+        let t = self.positions[index as usize];
+        t.map(|i| to_dvec(self.vertices.positions[i as usize]))
+    }
+
+    /// The point of triangle `index` with barycentric weights `b1`, `b2` of its second and third
+    /// corners, computed in double precision (so it lies on the triangle's plane).
+    #[inline]
+    pub fn point_at(&self, index: u32, b1: f32, b2: f32) -> DVec3 {
+        let [p0, p1, p2] = self.corners(index);
+        let (b1, b2) = (b1 as f64, b2 as f64);
+        p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2
+    }
+
+    /// The unit face normal of triangle `index`, `(p1 - p0) x (p2 - p0)` normalised.
+    #[inline]
+    pub fn face_normal(&self, index: u32) -> DVec3 {
+        let [p0, p1, p2] = self.corners(index);
+        (p1 - p0).cross(p2 - p0).normalize_or(DVec3::Z)
+    }
+
+    /// The interpolated vertex normal (unit) at the barycentric point, or `None` when the mesh
+    /// has no vertex normals (flat shading).
+    #[inline]
+    pub fn shading_normal(&self, index: u32, b1: f32, b2: f32) -> Option<DVec3> {
+        let n = &self.vertices.normals;
+        if n.is_empty() {
+            return None;
+        }
+        let ids = if self.normals.is_empty() {
+            self.positions[index as usize]
+        } else {
+            self.normals[index as usize]
+        };
+        if ids[0] == NONE {
+            return None;
+        }
+        let b0 = 1.0 - b1 - b2;
+        let s = Vec3::from(n[ids[0] as usize]) * b0
+            + Vec3::from(n[ids[1] as usize]) * b1
+            + Vec3::from(n[ids[2] as usize]) * b2;
+        s.as_dvec3().try_normalize()
+    }
+
+    /// Texture coordinates `(u, v)` at the barycentric point (our convention: `u` the row from
+    /// the bottom, `v` the column): the file's `vt` interpolated as `(t, s)`, or the barycentric
+    /// weights `(b1, b2)` when the mesh has none.
+    #[inline]
+    pub fn texture_coordinates(&self, index: u32, b1: f32, b2: f32) -> (f64, f64) {
+        match self.uv_corners(index) {
+            Some(uv) => {
+                let b0 = 1.0 - b1 - b2;
+                let s = uv[0][0] * b0 + uv[1][0] * b1 + uv[2][0] * b2;
+                let t = uv[0][1] * b0 + uv[1][1] * b1 + uv[2][1] * b2;
+                (t as f64, s as f64)
+            }
+            None => (b1 as f64, b2 as f64),
+        }
+    }
+
+    /// The directions in which the texture coordinates `u` and `v` grow on triangle `index`
+    /// (for normal maps).
+    pub fn texture_tangents(&self, index: u32) -> (DVec3, DVec3) {
+        let [p0, p1, p2] = self.corners(index);
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let Some(uv) = self.uv_corners(index) else { return (e1, e2) };
+        // Our (u, v) is the file's (t, s).
+        let (du1, dv1) = ((uv[1][1] - uv[0][1]) as f64, (uv[1][0] - uv[0][0]) as f64);
+        let (du2, dv2) = ((uv[2][1] - uv[0][1]) as f64, (uv[2][0] - uv[0][0]) as f64);
+        let det = du1 * dv2 - du2 * dv1;
+        if det.abs() < 1e-20 {
+            return (e1, e2);
+        }
+        ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
+    }
+
+    fn uv_corners(&self, index: u32) -> Option<[[f32; 2]; 3]> {
+        let uv = &self.vertices.uvs;
+        if uv.is_empty() {
+            return None;
+        }
+        let ids = if self.uvs.is_empty() { self.positions[index as usize] } else { self.uvs[index as usize] };
+        if ids[0] == NONE {
+            return None;
+        }
+        Some(ids.map(|i| uv[i as usize]))
+    }
+
+    /// The bounding box.
+    pub fn bounds(&self) -> Bounds {
+        self.bounds
+    }
+
+    /// The largest coordinate magnitude of the mesh (the scale of its rounding errors).
+    pub fn magnitude(&self) -> f64 {
+        self.magnitude
+    }
+}
+
+/// Whether a triangle's corners are collinear or coincide (in single precision).
+fn corners_degenerate(pos: &[[f32; 3]], t: &[u32; 3]) -> bool {
+    let p = t.map(|i| Vec3::from(pos[i as usize]));
+    let n = (p[1] - p[0]).cross(p[2] - p[0]);
+    n == Vec3::ZERO || !n.is_finite()
+}
+
+fn to_dvec(p: [f32; 3]) -> DVec3 {
+    DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64)
+}
+
+/// Computes unit vertex normals for `positions` by averaging the (area-weighted) normals of the
+/// faces around each position; positions no face uses get +z.
+pub fn smooth_normals(positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
+    let mut sum = vec![DVec3::ZERO; positions.len()];
+    for t in triangles {
+        if t.iter().any(|&i| i as usize >= positions.len()) {
+            continue;
+        }
+        let p = t.map(|i| to_dvec(positions[i as usize]));
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        for &i in t {
+            sum[i as usize] += n;
+        }
+    }
+    sum.iter().map(|n| n.normalize_or(DVec3::Z).as_vec3().to_array()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::test_util::TestRng;
+
+    /// An icosphere-like closed mesh: an octahedron subdivided `levels` times, pushed onto the
+    /// unit sphere.
+    pub(crate) fn sphere_mesh(levels: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+        let mut pos: Vec<DVec3> = vec![DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z];
+        let mut tris: Vec<[u32; 3]> =
+            vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        for _ in 0..levels {
+            let mut mid = std::collections::HashMap::new();
+            let mut next = Vec::new();
+            let mut midpoint = |a: u32, b: u32, pos: &mut Vec<DVec3>| {
+                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                    pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
+                    pos.len() as u32 - 1
+                })
+            };
+            for [a, b, c] in tris {
+                let (ab, bc, ca) =
+                    (midpoint(a, b, &mut pos), midpoint(b, c, &mut pos), midpoint(c, a, &mut pos));
+                next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+            }
+            tris = next;
+        }
+        (pos.iter().map(|p| p.as_vec3().to_array()).collect(), tris)
+    }
+
+    fn mesh(levels: u32) -> TriangleMesh {
+        let (positions, tris) = sphere_mesh(levels);
+        let normals = smooth_normals(&positions, &tris);
+        let vertices = Arc::new(MeshVertices { positions, normals, uvs: Vec::new() });
+        let tris: Vec<TriangleIndices> =
+            tris.iter().map(|&t| TriangleIndices { position: t, normal: t, uv: [NONE; 3] }).collect();
+        TriangleMesh::new(vertices, &tris)
+    }
+
+    /// The mesh BVH finds the same nearest triangle as testing every triangle.
+    #[test]
+    fn agrees_with_brute_force() {
+        let m = mesh(3);
+        let mut rng = TestRng::new(11);
+        for _ in 0..2000 {
+            let origin = rng.unit_vector() * 3.0 * rng.uniform().max(0.01);
+            let ray = Ray::new(origin, rng.unit_vector());
+            let mray = MeshRay::new(&ray);
+            let brute = (0..m.len() as u32)
+                .filter_map(|i| {
+                    let w = crate::geometry::triangle::WatertightRay::new(&ray);
+                    w.intersect(m.corners(i), 0.0, f64::INFINITY).map(|(t, _, _)| (i, t))
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            let found = m.intersect_f32(&mray, f32::INFINITY);
+            match (brute, found) {
+                (Some((_, tb)), Some((_, t, _, _))) => {
+                    assert!((tb - t as f64).abs() < 1e-5, "t {tb} vs {t}")
+                }
+                (None, None) => {}
+                (b, f) => panic!("brute {b:?} vs bvh {f:?} for {ray:?}"),
+            }
+            assert_eq!(m.occluded_f32(&mray, f32::INFINITY), found.is_some());
+        }
+    }
+
+    /// Rays aimed at the vertices and edge midpoints of a closed mesh from outside always hit it.
+    #[test]
+    fn closed_mesh_is_watertight_at_edges_and_vertices() {
+        let m = mesh(2);
+        let mut rng = TestRng::new(12);
+        let v = &m.vertices().positions;
+        let mut targets: Vec<DVec3> = v.iter().map(|p| to_dvec(*p)).collect();
+        for t in &m.positions {
+            for c in 0..3 {
+                let (a, b) = (to_dvec(v[t[c] as usize]), to_dvec(v[t[(c + 1) % 3] as usize]));
+                targets.push(a + (b - a) * rng.uniform());
+            }
+        }
+        for target in targets {
+            for _ in 0..4 {
+                let origin = target + (target.normalize() + rng.unit_vector() * 0.7).normalize() * 2.5;
+                let ray = Ray::new(origin, target - origin);
+                assert!(m.intersect(&ray, f64::INFINITY).is_some(), "{ray:?} slipped into the mesh");
+                // And from inside out.
+                let inside = Ray::new(target * 0.3, target - target * 0.3);
+                assert!(m.intersect(&inside, f64::INFINITY).is_some(), "{inside:?} escaped the mesh");
+            }
+        }
+    }
+
+    #[test]
+    fn smooth_normals_of_a_sphere_point_outwards() {
+        let m = mesh(3);
+        let mut rng = TestRng::new(13);
+        for _ in 0..200 {
+            let d = rng.unit_vector();
+            let ray = Ray::new(d * 3.0, -d);
+            let hit = m.intersect(&ray, f64::INFINITY).expect("hit");
+            let ShapePart::Triangle { index, b1, b2 } = hit.part else { panic!() };
+            let n = m.shading_normal(index, b1, b2).expect("normals");
+            let p = m.point_at(index, b1, b2);
+            assert!(n.dot(p.normalize()) > 0.99, "normal {n} at {p}");
+            assert!((p - ray.at(hit.t)).length() < 1e-5);
+        }
+    }
+}
