@@ -7,6 +7,7 @@
 mod merge;
 mod render;
 mod size;
+mod split;
 mod terrain;
 
 use std::process::ExitCode;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use raytracer::image_io::{OutputFormat, write_image};
+use raytracer::image_io::{check_output, write_image};
 use raytracer::parts::{self, Part};
 
 /// Arguments of `rayterra merge`.
@@ -34,7 +34,7 @@ pub struct MergeArgs {
 /// Runs `rayterra merge`.
 pub fn run(args: MergeArgs) -> Result<(), ExitCode> {
     let started = Instant::now();
-    let format = OutputFormat::from_path(&args.output).map_err(|e| fail(&e.to_string()))?;
+    let format = check_output(&args.output).map_err(|e| fail(&e.to_string()))?;
     if format.is_linear() && args.gamma {
         eprintln!("warning: --gamma has no effect on linear {format:?} output");
     }

@@ -63,7 +63,7 @@ fn slurm_available() -> bool {
     if std::env::var_os("CI").is_some() {
         panic!("{message} (required under CI)");
     }
-    eprintln!("\n**** SKIPPED: {message} ****\n");
+    test_skips::skip("Slurm tests", message);
     false
 }
 
@@ -180,7 +180,7 @@ fn a_cancelled_task_resubmitted_alone_completes_the_image() {
     let scene = workspace().join("scenes/cornell.txt");
     let output = dir.join("final.png");
     // Slow enough (one thread) that a task can be cancelled while it renders.
-    let args = "--size 128x128 --model path --spp 64";
+    let args = "--size 160x160 --model path --spp 128";
     let env = |parts_total: &str| {
         vec![
             ("SCENE", scene.display().to_string()),
@@ -202,12 +202,22 @@ fn a_cancelled_task_resubmitted_alone_completes_the_image() {
         );
         std::thread::sleep(Duration::from_millis(100));
     }
-    std::thread::sleep(Duration::from_secs(2));
+    // Cancelled once it has saved some of its work in its checkpoint.
+    let checkpoint = parts.join("part-1.checkpoint");
+    while std::fs::metadata(&checkpoint).map_or(0, |m| m.len()) < 20_000 {
+        assert!(start.elapsed() < Duration::from_secs(180), "task 1 saved nothing\n{}", logs(&dir));
+        std::thread::sleep(Duration::from_millis(50));
+    }
     run(Command::new("scancel").arg(&victim));
     wait_for_queue(Duration::from_secs(300));
-    // The cancelled task left nothing behind, the others their parts, and the merge job was
-    // cancelled with the array.
-    assert_eq!(files_in(&parts), ["part-0.exr", "part-2.exr", "part-3.exr"], "logs:\n{}", logs(&dir));
+    // The cancelled task left no part and no temporary file, only its checkpoint; the others
+    // left their parts, and the merge job was cancelled with the array.
+    assert_eq!(
+        files_in(&parts),
+        ["part-0.exr", "part-1.checkpoint", "part-2.exr", "part-3.exr"],
+        "logs:\n{}",
+        logs(&dir)
+    );
     assert!(!output.exists(), "the merge job ran although a part is missing");
     let stamps = |names: &[&str]| -> Vec<SystemTime> {
         names
@@ -225,7 +235,9 @@ fn a_cancelled_task_resubmitted_alone_completes_the_image() {
         before,
         "a finished part was rendered again"
     );
-    let local = local_render(&dir, &scene, &["--size", "128x128", "--model", "path", "--spp", "64"]);
+    assert_eq!(files_in(&parts), ["part-0.exr", "part-1.exr", "part-2.exr", "part-3.exr"]);
+    assert!(logs(&dir).contains("note: resuming from"), "task 1 started again from nothing");
+    let local = local_render(&dir, &scene, &["--size", "160x160", "--model", "path", "--spp", "128"]);
     assert!(merged == local, "the completed image differs from the local render");
 }
 

@@ -372,7 +372,7 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
     let is_pass = header.pass.count > 1;
     let mut blocks = Vec::with_capacity(image.layer_data.len());
     for (layer, rows) in image.layer_data.iter().zip(expected) {
-        let find = |name: &str| layer.channel_data.list.iter().find(|c| c.name == Text::from(name));
+        let find = |name: &str| layer.channel_data.list.iter().find(|c| c.name == *name);
         let float = |name: &str| match find(name).map(|c| &c.sample_data) {
             Some(FlatSamples::F32(v)) => Ok(v),
             _ => Err(not_a_part(format!("a block has no 32-bit float `{name}` channel"))),
@@ -411,7 +411,8 @@ pub fn merge(parts: &[(PathBuf, Part)]) -> Result<Image, PartError> {
     };
     let f = &first.header;
     // Everything that must agree, with how to say it.
-    let checks: [(&str, fn(&PartHeader) -> String); 5] = [
+    type Key = fn(&PartHeader) -> String;
+    let checks: [(&str, Key); 5] = [
         ("image size", |h| format!("{}x{}", h.width, h.height)),
         ("scene (its text, textures or meshes)", |h| h.scene.clone()),
         ("settings", |h| h.settings.clone()),

@@ -201,7 +201,7 @@ impl SppmStats {
 }
 
 /// The state of one pixel across passes.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct PixelState {
     /// Sum over passes of the light the camera paths gathered directly.
     direct: DVec3,
@@ -232,6 +232,58 @@ struct VisiblePoint {
     m: u64,
 }
 
+/// The state of an SPPM render of some rows between two passes: all it needs to go on, so that
+/// a render resumed from it ([`render_from`]) gives the very values of one that never stopped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SppmState {
+    /// Passes finished.
+    pub passes_done: u64,
+    /// Each pixel's state, in the order of [`Rows::ys`].
+    pixels: Vec<PixelState>,
+    /// What the finished passes did (rays, photons; `mean_radius` is set at the end).
+    pub stats: SppmStats,
+}
+
+impl SppmState {
+    /// Values a pixel holds in [`SppmState::values`].
+    pub const VALUES_PER_PIXEL: usize = 8;
+
+    /// The state before the first pass of a render of `pixels` pixels.
+    pub fn new(pixels: usize) -> SppmState {
+        SppmState { passes_done: 0, pixels: vec![PixelState::default(); pixels], stats: SppmStats::default() }
+    }
+
+    /// The pixels' state as [`Self::VALUES_PER_PIXEL`] numbers a pixel (to be saved exactly).
+    pub fn values(&self) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.pixels.len() * Self::VALUES_PER_PIXEL);
+        for p in &self.pixels {
+            out.extend_from_slice(&[
+                p.direct.x, p.direct.y, p.direct.z, p.tau.x, p.tau.y, p.tau.z, p.n, p.r2,
+            ]);
+        }
+        out
+    }
+
+    /// The state [`Self::values`] saved, after `passes_done` passes that did `stats`.
+    pub fn from_values(passes_done: u64, values: &[f64], stats: SppmStats) -> SppmState {
+        let pixels = values
+            .chunks_exact(Self::VALUES_PER_PIXEL)
+            .map(|v| PixelState {
+                direct: DVec3::new(v[0], v[1], v[2]),
+                tau: DVec3::new(v[3], v[4], v[5]),
+                n: v[6],
+                r2: v[7],
+            })
+            .collect();
+        SppmState { passes_done, pixels, stats }
+    }
+
+    /// The number of pixels.
+    pub fn pixels(&self) -> usize {
+        self.pixels.len()
+    }
+}
+
 /// Renders the pixels of `rows` (in the order of [`Rows::ys`]), seen through `camera`, with SPPM.
 /// `progress(passes)` is called after each pass.
 pub fn render(
@@ -241,22 +293,39 @@ pub fn render(
     rows: &Rows,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<DVec3>, SppmStats) {
+    render_from(scene, camera, settings, rows, SppmState::new(rows.len()), &mut |_| {}, progress)
+}
+
+/// [`render`] from `state` (the state after some passes of the same render, or
+/// [`SppmState::new`]), calling `after_pass` with the state after each pass.
+///
+/// # Panics
+/// If `state` is not a state of `rows.len()` pixels.
+pub fn render_from(
+    scene: &PreparedScene,
+    camera: &Camera,
+    settings: &SppmSettings,
+    rows: &Rows,
+    state: SppmState,
+    after_pass: &mut dyn FnMut(&SppmState),
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Vec<DVec3>, SppmStats) {
     let lights = Lights::new(scene);
     let image_width = rows.width();
     let w = image_width as usize;
     let ys: Vec<u32> = rows.ys().collect();
     let pixels = rows.len();
+    assert_eq!(state.pixels.len(), pixels, "an SPPM state of another set of rows");
     if pixels == 0 {
         return (Vec::new(), SppmStats::default());
     }
-    let mut states = vec![PixelState::default(); pixels];
+    let SppmState { passes_done, pixels: mut states, mut stats } = state;
     let mut points = vec![VisiblePoint::default(); pixels];
-    let rays = AtomicU64::new(0);
-    let mut stats = SppmStats::default();
+    let rays = AtomicU64::new(stats.rays);
     let cam = &scene.scene.camera;
     let pixel_angle = cam.lens_width / image_width as f64;
-    let mut photon_seconds = 0.0;
-    for pass in 0..settings.passes {
+    let mut photon_seconds = stats.photon_seconds;
+    for pass in passes_done..settings.passes {
         // 1. Camera pass.
         points.par_chunks_mut(w).zip(states.par_chunks_mut(w)).enumerate().for_each(
             |(row, (points, states))| {
@@ -373,6 +442,13 @@ pub fn render(
         });
         stats.passes += 1;
         progress(pass + 1);
+        if pass + 1 < settings.passes {
+            let stats = SppmStats { rays: rays.load(Ordering::Relaxed), photon_seconds, ..stats };
+            // The pixel states move into the saved state and back: no copy.
+            let saved = SppmState { passes_done: pass + 1, pixels: std::mem::take(&mut states), stats };
+            after_pass(&saved);
+            states = saved.pixels;
+        }
     }
 
     let passes = settings.passes.max(1) as f64;

@@ -30,18 +30,19 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use glam::DVec3;
 use rayon::prelude::*;
 
 mod adaptive;
+pub mod checkpoint;
 
 use adaptive::AdaptiveSampler;
+use checkpoint::{Checkpoint, CheckpointError, Estimate};
 
 use crate::camera::Camera;
 use crate::image_io::Image;
 use crate::integrator::path::{DEFAULT_MAX_DEPTH, PathTracer};
 use crate::integrator::photon::{self, PhotonEstimate, PhotonStats};
-use crate::integrator::sppm::{self, SppmSettings, SppmStats};
+use crate::integrator::sppm::{self, SppmSettings, SppmState, SppmStats};
 use crate::integrator::{Classic, Model};
 use crate::parts::{Split, tile_rows};
 use crate::prepare::{Hit, PreparedScene};
@@ -63,6 +64,8 @@ pub const NOISE_THRESHOLD: f64 = 2.0 / 255.0;
 pub const MAX_NESTED_FACTOR: u32 = 4;
 /// Largest `--spp`.
 pub const MAX_SPP: u32 = 1 << 20;
+/// Most independent runs of a render ([`RenderSettings::runs`]).
+pub const MAX_RUNS: u32 = 1 << 16;
 /// Samples a pixel of the path tracer when none are asked for.
 pub const DEFAULT_PATH_SPP: u32 = 64;
 /// Deepest path `--max-depth` accepts.
@@ -173,6 +176,8 @@ pub enum Stage {
     Sampling,
     /// SPPM passes (units are passes).
     Passes,
+    /// Chunks of rows of a render that keeps a checkpoint (units are chunks).
+    Chunks,
 }
 
 /// A progress report: `done` of `total` units (rows while tracing, pixels while refining, samples
@@ -257,6 +262,9 @@ pub enum RenderError {
     /// limit), with where in the scene file.
     #[error("{0}")]
     Settings(Box<Diagnostic>),
+    /// The checkpoint could not be saved.
+    #[error(transparent)]
+    Checkpoint(CheckpointError),
     /// The worker threads could not be started.
     #[error("cannot start {threads} worker threads: {source}")]
     Threads {
@@ -320,6 +328,20 @@ pub fn render_portion(
     runs: Range<u32>,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<Portion, RenderError> {
+    render_portion_resumable(scene, settings, rows, runs, progress, None)
+}
+
+/// [`render_portion`] keeping its finished work in `checkpoint` as it goes, and taking from it
+/// what an earlier, interrupted render of the same portion finished: the pixels are the same bit
+/// for bit either way (see [`checkpoint`]).
+pub fn render_portion_resumable(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    rows: &Rows,
+    runs: Range<u32>,
+    progress: &(dyn Fn(Progress) + Sync),
+    mut checkpoint: Option<&mut Checkpoint>,
+) -> Result<Portion, RenderError> {
     check_image_size(settings.width, settings.height).map_err(RenderError::ImageSize)?;
     if let Sampling::Uniform(n) = settings.sampling
         && !(1..=MAX_SPP).contains(&n)
@@ -329,7 +351,7 @@ pub fn render_portion(
     if !(1..=MAX_DEPTH_LIMIT).contains(&settings.max_depth) {
         return Err(RenderError::Depth(settings.max_depth));
     }
-    if settings.runs == 0 || runs.is_empty() || runs.end > settings.runs {
+    if !(1..=MAX_RUNS).contains(&settings.runs) || runs.is_empty() || runs.end > settings.runs {
         return Err(RenderError::Runs { runs, total: settings.runs });
     }
     if rows.width() != settings.width || rows.blocks().last().is_some_and(|b| b.end > settings.height) {
@@ -355,23 +377,28 @@ pub fn render_portion(
         .build()
         .map_err(|source| RenderError::Threads { threads, source })?;
     let whole = runs.start == 0 && runs.end == settings.runs;
-    Ok(pool.install(|| {
+    pool.install(|| {
         let mut stats = RenderStats { threads: rayon::current_num_threads(), ..RenderStats::default() };
         let mut total: Option<Vec<ExactSum>> = None;
         let mut count = 0;
         for run in runs {
-            let (estimate, run_stats) = render_run(scene, settings, rows, run, progress);
+            let (estimate, run_stats) = match settings.model {
+                Model::Sppm => {
+                    render_sppm_run(scene, settings, rows, run, progress, checkpoint.as_deref_mut())?
+                }
+                _ => render_rows_run(scene, settings, rows, run, progress, checkpoint.as_deref_mut())?,
+            };
             stats.add(&run_stats);
             let (sums, n) = match estimate {
                 // A lone run keeps its values as they are.
-                RunEstimate::Colors(colors) if whole && settings.runs == 1 => {
-                    return Portion {
+                Estimate::Colors(colors) if whole && settings.runs == 1 => {
+                    return Ok(Portion {
                         pixels: PortionPixels::Final(colors.iter().map(|c| c.as_vec3().to_array()).collect()),
                         stats,
-                    };
+                    });
                 }
                 // A run's image counts as one estimate, as stored in an image (32-bit floats).
-                RunEstimate::Colors(colors) => (
+                Estimate::Colors(colors) => (
                     colors
                         .iter()
                         .map(|c| {
@@ -382,7 +409,7 @@ pub fn render_portion(
                         .collect(),
                     1,
                 ),
-                RunEstimate::Sums(sums, n) => (sums, n),
+                Estimate::Sums(sums, n) => (sums, n),
             };
             count += n;
             match &mut total {
@@ -396,16 +423,8 @@ pub fn render_portion(
         } else {
             PortionPixels::Sums { sums, count }
         };
-        Portion { pixels, stats }
-    }))
-}
-
-/// What one run of a model gives for the pixels of some rows.
-enum RunEstimate {
-    /// One estimate a pixel (classic, photon, sppm).
-    Colors(Vec<DVec3>),
-    /// Exact sums of this many samples a pixel (path).
-    Sums(Vec<ExactSum>, u64),
+        Ok(Portion { pixels, stats })
+    })
 }
 
 /// The seed of run `run`: the render's seed for the first run (so that a render of one run is the
@@ -414,59 +433,152 @@ pub fn run_seed(seed: u64, run: u32) -> u64 {
     if run == 0 { seed } else { hash_values(&[seed, stream::RUN, run as u64]) }
 }
 
-/// Run `run` of the settings' model over `rows`.
-fn render_run(
+/// Run `run` of the classic, photon or path model over `rows`: in one go, or with a checkpoint in
+/// [`checkpoint::CHUNKS`] chunks of rows, each saved as it finishes and taken from the checkpoint
+/// when an earlier render saved it.
+fn render_rows_run(
     scene: &PreparedScene,
     settings: &RenderSettings,
     rows: &Rows,
     run: u32,
     progress: &(dyn Fn(Progress) + Sync),
-) -> (RunEstimate, RenderStats) {
+    mut checkpoint: Option<&mut Checkpoint>,
+) -> Result<(Estimate, RenderStats), RenderError> {
     let seed = run_seed(settings.seed, run);
-    match settings.model {
-        Model::Classic => {
-            let (colors, stats) =
-                AdaptiveSampler::new(scene, Classic::new(scene), settings, seed).run(rows, progress);
-            (RunEstimate::Colors(colors), stats)
+    let chunks = match checkpoint {
+        Some(_) => checkpoint::chunk_rows(rows),
+        None => vec![rows.clone()],
+    };
+    let chunked = chunks.len() > 1;
+    // A chunk's progress is reported as chunks done, not as its own stages.
+    let chunk_progress = |p: Progress| {
+        if !chunked || matches!(p.stage, Stage::TracingPhotons | Stage::BuildingPhotonMap) {
+            progress(p);
         }
-        Model::Photon => {
-            let photon_settings = settings.photon_settings(scene);
-            let report = |done, total| progress(Progress { stage: Stage::TracingPhotons, done, total });
-            let (map, photon_stats) = photon::build_photon_map(scene, &photon_settings, seed, &report);
-            progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
-            let integrator = Classic::with_photons(scene, PhotonEstimate::new(&map, &photon_settings));
-            let (colors, mut stats) =
-                AdaptiveSampler::new(scene, integrator, settings, seed).run(rows, progress);
-            stats.photons = Some(photon_stats);
-            (RunEstimate::Colors(colors), stats)
+    };
+    let photon_settings = settings.photon_settings(scene);
+    // The photon map, built when the first chunk that needs it is rendered.
+    let mut photon_map = None;
+    let mut stats = RenderStats::default();
+    let mut estimates = Vec::with_capacity(chunks.len());
+    for (i, chunk) in chunks.iter().enumerate() {
+        let saved = checkpoint.as_deref().and_then(|c| c.chunk(run, i as u32));
+        let estimate = match saved {
+            Some(estimate) => estimate.clone(),
+            None => {
+                let (estimate, chunk_stats) = match settings.model {
+                    Model::Path => {
+                        // Runs of the path tracer are ranges of sample indices: `--spp` samples each.
+                        let spp = settings.path_spp() as u64;
+                        let samples = run as u64 * spp..(run as u64 + 1) * spp;
+                        let total = chunk.len() as u64 * spp;
+                        let report = |done| chunk_progress(Progress { stage: Stage::Sampling, done, total });
+                        report(0);
+                        let (sums, rays) = path_sums(scene, settings, chunk, samples, &report);
+                        (
+                            Estimate::Sums(sums, spp),
+                            RenderStats { rays, camera_samples: total, ..RenderStats::default() },
+                        )
+                    }
+                    Model::Photon => {
+                        let (map, photon_stats) = photon_map.get_or_insert_with(|| {
+                            let report = |done, total| {
+                                chunk_progress(Progress { stage: Stage::TracingPhotons, done, total })
+                            };
+                            let built = photon::build_photon_map(scene, &photon_settings, seed, &report);
+                            chunk_progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
+                            built
+                        });
+                        let integrator =
+                            Classic::with_photons(scene, PhotonEstimate::new(map, &photon_settings));
+                        let (colors, mut chunk_stats) =
+                            AdaptiveSampler::new(scene, integrator, settings, seed)
+                                .run(chunk, &chunk_progress);
+                        // The map's making counts once, with its first chunk.
+                        if stats.photons.is_none() {
+                            chunk_stats.photons = Some(*photon_stats);
+                        }
+                        (Estimate::Colors(colors), chunk_stats)
+                    }
+                    Model::Classic => {
+                        let (colors, chunk_stats) =
+                            AdaptiveSampler::new(scene, Classic::new(scene), settings, seed)
+                                .run(chunk, &chunk_progress);
+                        (Estimate::Colors(colors), chunk_stats)
+                    }
+                    Model::Sppm => unreachable!("SPPM runs are rendered by render_sppm_run"),
+                };
+                stats.add(&chunk_stats);
+                if let Some(c) = checkpoint.as_deref_mut() {
+                    c.save_chunk(run, i as u32, estimate.clone()).map_err(RenderError::Checkpoint)?;
+                }
+                estimate
+            }
+        };
+        if chunked {
+            progress(Progress { stage: Stage::Chunks, done: i as u64 + 1, total: chunks.len() as u64 });
         }
-        Model::Path => {
-            // Runs of the path tracer are ranges of sample indices: `--spp` samples each.
-            let spp = settings.path_spp() as u64;
-            let samples = run as u64 * spp..(run as u64 + 1) * spp;
-            let total = rows.len() as u64 * spp;
-            progress(Progress { stage: Stage::Sampling, done: 0, total });
-            let report = |done| progress(Progress { stage: Stage::Sampling, done, total });
-            let (sums, rays) = path_sums(scene, settings, rows, samples, &report);
-            let stats = RenderStats { rays, camera_samples: total, ..RenderStats::default() };
-            (RunEstimate::Sums(sums, spp), stats)
-        }
-        Model::Sppm => {
-            let sppm_settings = SppmSettings { seed, ..settings.sppm_settings(scene) };
-            let camera = camera_for(scene, settings);
-            let total = sppm_settings.passes;
-            progress(Progress { stage: Stage::Passes, done: 0, total });
-            let report = |done| progress(Progress { stage: Stage::Passes, done, total });
-            let (colors, sppm_stats) = sppm::render(scene, &camera, &sppm_settings, rows, &report);
-            let stats = RenderStats {
-                rays: sppm_stats.rays,
-                camera_samples: rows.len() as u64 * sppm_stats.passes,
-                sppm: Some(sppm_stats),
-                ..RenderStats::default()
-            };
-            (RunEstimate::Colors(colors), stats)
+        estimates.push(estimate);
+    }
+    Ok((concatenate(estimates), stats))
+}
+
+/// The estimates of consecutive chunks of rows as one.
+fn concatenate(estimates: Vec<Estimate>) -> Estimate {
+    let mut estimates = estimates.into_iter();
+    let Some(mut all) = estimates.next() else {
+        return Estimate::Colors(Vec::new());
+    };
+    for next in estimates {
+        match (&mut all, next) {
+            (Estimate::Colors(all), Estimate::Colors(more)) => all.extend(more),
+            (Estimate::Sums(all, _), Estimate::Sums(more, _)) => all.extend(more),
+            _ => unreachable!("the chunks of a run are estimated alike"),
         }
     }
+    all
+}
+
+/// Run `run` of SPPM over `rows`, from the state a checkpoint saved if there is one, saving its
+/// state there after passes.
+fn render_sppm_run(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    rows: &Rows,
+    run: u32,
+    progress: &(dyn Fn(Progress) + Sync),
+    mut checkpoint: Option<&mut Checkpoint>,
+) -> Result<(Estimate, RenderStats), RenderError> {
+    let sppm_settings = SppmSettings { seed: run_seed(settings.seed, run), ..settings.sppm_settings(scene) };
+    let camera = camera_for(scene, settings);
+    let total = sppm_settings.passes;
+    let start = checkpoint
+        .as_deref()
+        .and_then(|c| c.sppm_state(run))
+        .cloned()
+        .unwrap_or_else(|| SppmState::new(rows.len()));
+    progress(Progress { stage: Stage::Passes, done: start.passes_done, total });
+    let report = |done| progress(Progress { stage: Stage::Passes, done, total });
+    let mut failure = None;
+    let mut after_pass = |state: &SppmState| {
+        if let Some(c) = checkpoint.as_deref_mut()
+            && failure.is_none()
+        {
+            failure = c.save_sppm(run, state).err();
+        }
+    };
+    let (colors, sppm_stats) =
+        sppm::render_from(scene, &camera, &sppm_settings, rows, start, &mut after_pass, &report);
+    if let Some(error) = failure {
+        return Err(RenderError::Checkpoint(error));
+    }
+    let stats = RenderStats {
+        rays: sppm_stats.rays,
+        camera_samples: rows.len() as u64 * sppm_stats.passes,
+        sppm: Some(sppm_stats),
+        ..RenderStats::default()
+    };
+    Ok((Estimate::Colors(colors), stats))
 }
 
 /// The camera of a render: the scene's, at the settings' size, focused at `focal_dist=` or (a
@@ -497,7 +609,7 @@ pub struct Rows {
 impl Rows {
     /// Every row of a `width x height` image.
     pub fn full(width: u32, height: u32) -> Rows {
-        Rows { width, blocks: if height > 0 { vec![0..height] } else { Vec::new() } }
+        Rows::from_blocks(width, std::iter::once(0..height).collect())
     }
 
     /// The rows of tile `tile` of a `width x height` image ([`crate::parts::tile_rows`]).
