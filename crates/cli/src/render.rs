@@ -5,15 +5,13 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use raytracer::image_io::Image;
-use raytracer::image_io::{OutputFormat, check_output, write_image};
+use raytracer::image_io::{Image, OutputFormat, check_output, write_image};
 use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::sppm::SppmStats;
 use raytracer::integrator::{Model, choose_model};
 use raytracer::memory::parse_byte_size;
 use raytracer::parts::{self, Part, PartHeader, Split};
-use raytracer::render::checkpoint::Checkpoint;
 use raytracer::render::{
     DEFAULT_PATH_SPP, MAX_DEPTH_LIMIT, MAX_RUNS, MAX_SPP, PortionPixels, Progress, RenderStats, Rows, Stage,
     render_portion_resumable,
@@ -320,17 +318,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let mut checkpoint = match &args.checkpoint {
         Some(path) => {
             let key = format!("scene {scene_digest}\nsettings {settings_line}\ntile {tile}\npass {pass}");
-            let checkpoint = Checkpoint::open(path, &key, &rows).map_err(|e| fail(&e.to_string()))?;
-            match checkpoint.resumed() {
-                (0, 0) => {}
-                (chunks, 0) => {
-                    eprintln!("note: resuming from `{}`: {chunks} chunks of rows were done", path.display())
-                }
-                (_, passes) => {
-                    eprintln!("note: resuming from `{}` after {passes} SPPM passes", path.display())
-                }
-            }
-            Some(checkpoint)
+            Some(crate::split::open_checkpoint(path, &key, &rows).map_err(|e| fail(&e))?)
         }
         None => None,
     };
@@ -379,13 +367,12 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         );
     }
     if !args.quiet {
-        print_summary(&args.output, &settings, &stats, prepare_time, render_time);
-        if is_part {
-            println!(
-                "a part file: tile {tile} ({} of {h} rows), pass {pass}; `rayterra merge` assembles the parts",
-                rows.ys().count()
-            );
-        }
+        let pixels = if is_part {
+            format!("{} of {w}x{h} pixels (tile {tile}, pass {pass})", rows.len())
+        } else {
+            format!("{w}x{h} pixels")
+        };
+        print_summary(&args.output, &pixels, &settings, &stats, prepare_time, render_time);
     }
     Ok(())
 }
@@ -455,8 +442,10 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     bar
 }
 
+/// The summary of a render of `pixels` (what was rendered, as words).
 fn print_summary(
     output: &Path,
+    pixels: &str,
     settings: &RenderSettings,
     stats: &RenderStats,
     prepare: Duration,
@@ -464,7 +453,7 @@ fn print_summary(
 ) {
     println!("wrote {}", output.display());
     if settings.model.is_physically_based() {
-        print_physical_summary(settings, stats, prepare, render);
+        print_physical_summary(pixels, settings, stats, prepare, render);
         return;
     }
     // The photon phase is reported on its own line; the pixel phase is the rest.
@@ -475,9 +464,7 @@ fn print_summary(
     let seconds = render.saturating_sub(photon_phase).as_secs_f64().max(1e-9);
     let rays_per_second = stats.rays as f64 / seconds;
     println!(
-        "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
-        settings.width,
-        settings.height,
+        "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
         seconds,
         prepare.as_secs_f64(),
         stats.threads,
@@ -501,6 +488,7 @@ fn print_summary(
 
 /// The summary of a path or SPPM render: samples (or passes and photons) a second.
 fn print_physical_summary(
+    pixels: &str,
     settings: &RenderSettings,
     stats: &RenderStats,
     prepare: Duration,
@@ -509,9 +497,7 @@ fn print_physical_summary(
     let seconds = render.as_secs_f64().max(1e-9);
     let threads = stats.threads.max(1) as f64;
     println!(
-        "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
-        settings.width,
-        settings.height,
+        "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
         seconds,
         prepare.as_secs_f64(),
         stats.threads,
@@ -532,13 +518,14 @@ fn print_physical_summary(
         None => {
             let spp = settings.path_spp();
             let rate = stats.camera_samples as f64 / seconds;
+            let default = spp == DEFAULT_PATH_SPP && settings.sampling == Sampling::Adaptive;
+            let passes = match settings.runs {
+                1 => String::new(),
+                n => format!(" in each of {n} passes"),
+            };
             println!(
-                "{spp} samples a pixel{}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
-                if spp == DEFAULT_PATH_SPP && settings.sampling == Sampling::Adaptive {
-                    " (default)"
-                } else {
-                    ""
-                },
+                "{spp} samples a pixel{}{passes}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
+                if default { " (default)" } else { "" },
                 stats.camera_samples,
                 rate / 1e6,
                 rate / 1e6 / threads

@@ -1,8 +1,12 @@
 //! The command line of split renders: `--tile` and `--pass` (`K/N`, or `auto` from a batch
 //! scheduler's task index), and what a part file says of the render it belongs to.
 
+use std::path::{Path, PathBuf};
+
 use raytracer::RenderSettings;
 use raytracer::parts::{SceneDigest, Split};
+use raytracer::render::Rows;
+use raytracer::render::checkpoint::Checkpoint;
 use raytracer::scene::SourceFile;
 
 /// Variables that hold a task's index, in the order they are looked for: a Slurm array task's,
@@ -73,7 +77,7 @@ pub fn settings_line(settings: &RenderSettings) -> String {
 
 /// The digest of a scene: its text and the bytes of every file it read (in the scene's order;
 /// by content, not by path, so that machines that mount the files elsewhere agree).
-pub fn scene_digest(source: &SourceFile, inputs: &[std::path::PathBuf]) -> Result<String, String> {
+pub fn scene_digest(source: &SourceFile, inputs: &[PathBuf]) -> Result<String, String> {
     let mut digest = SceneDigest::new();
     digest.add("scene", source.text().as_bytes());
     for (i, path) in inputs.iter().enumerate() {
@@ -82,6 +86,20 @@ pub fn scene_digest(source: &SourceFile, inputs: &[std::path::PathBuf]) -> Resul
         digest.add(&format!("input {i}"), &bytes);
     }
     Ok(digest.finish())
+}
+
+/// Opens (or starts) the checkpoint at `path` of the render of `rows` that `key` describes, and
+/// says what it resumes.
+pub fn open_checkpoint(path: &Path, key: &str, rows: &Rows) -> Result<Checkpoint, String> {
+    let checkpoint = Checkpoint::open(path, key, rows).map_err(|e| e.to_string())?;
+    match checkpoint.resumed() {
+        (0, 0) => {}
+        (chunks, 0) => {
+            eprintln!("note: resuming from `{}`: {chunks} chunks of rows were done", path.display())
+        }
+        (_, passes) => eprintln!("note: resuming from `{}` after {passes} SPPM passes", path.display()),
+    }
+    Ok(checkpoint)
 }
 
 #[cfg(test)]

@@ -4,8 +4,9 @@
 //! stopped.
 //!
 //! The unit of work saved is, for the classic, photon and path models, a *chunk*: one run's
-//! values for about a [`CHUNKS`]-th of the portion's rows (any set of rows renders to the same
-//! values on its own, see [`super::render_portion`]); for SPPM, a run's whole state after a pass
+//! values for up to a [`CHUNKS`]-th of the portion's rows (any set of rows renders to the same
+//! values on its own, see [`super::render_portion`]; a tile's blocks are grouped whole, a whole
+//! image is cut into pieces of at least 16 rows); for SPPM, a run's whole state after a pass
 //! ([`SppmState`]), whose random numbers depend only on the pass and pixel or photon index.
 //!
 //! The file: the line `rayterra checkpoint 1`, the length and text of a *key* that says which
@@ -28,7 +29,7 @@ use super::Rows;
 use crate::integrator::sppm::{SppmState, SppmStats};
 use crate::sampler::ExactSum;
 
-/// The chunks a run's rows are cut into when a render keeps a checkpoint.
+/// The most chunks a run's rows are cut into when a render keeps a checkpoint.
 pub const CHUNKS: u32 = 32;
 
 /// The first line of a checkpoint file.
@@ -311,22 +312,32 @@ impl Checkpoint {
 /// The bytes of an SPPM record's payload before the pixels: passes done, then the statistics.
 const SPPM_FIXED_BYTES: u64 = 6 * 8;
 
-/// The rows of `rows` in [`CHUNKS`] chunks of consecutive rows (fewer for fewer rows), top first.
+/// The fewest rows a chunk cut out of a block has: adaptive anti-aliasing renders the rows just
+/// above and below a chunk again, so a chunk of 16 rows costs at most 2/16 more first-pass work.
+const MIN_CHUNK_ROWS: u32 = 16;
+
+/// The rows of `rows` in about [`CHUNKS`] chunks, top first. Many blocks (a tile's) are grouped
+/// whole, which adds no border; few (a whole image's one) are cut into pieces of at least
+/// [`MIN_CHUNK_ROWS`] rows.
 pub(crate) fn chunk_rows(rows: &Rows) -> Vec<Rows> {
-    let ys: Vec<u32> = rows.ys().collect();
-    let per_chunk = ys.len().div_ceil(CHUNKS as usize).max(1);
-    ys.chunks(per_chunk)
-        .map(|chunk| {
-            // Consecutive rows of the chunk become one block.
-            let mut blocks: Vec<std::ops::Range<u32>> = Vec::new();
-            for &y in chunk {
-                match blocks.last_mut() {
-                    Some(b) if b.end == y => b.end += 1,
-                    _ => blocks.push(y..y + 1),
-                }
-            }
-            Rows::from_blocks(rows.width(), blocks)
+    let blocks = rows.blocks();
+    let n = blocks.len();
+    if n >= CHUNKS as usize {
+        let chunks = CHUNKS as usize;
+        return (0..chunks)
+            .map(|i| Rows::from_blocks(rows.width(), blocks[i * n / chunks..(i + 1) * n / chunks].to_vec()))
+            .collect();
+    }
+    let total: u32 = blocks.iter().map(|b| b.len() as u32).sum();
+    let piece = total.div_ceil(CHUNKS).max(MIN_CHUNK_ROWS);
+    blocks
+        .iter()
+        .flat_map(|b| {
+            let pieces = (b.len() as u32 / piece).max(1);
+            let (start, len) = (b.start, b.len() as u32);
+            (0..pieces).map(move |i| start + i * len / pieces..start + (i + 1) * len / pieces)
         })
+        .map(|block| Rows::from_blocks(rows.width(), vec![block]))
         .collect()
 }
 
@@ -417,13 +428,23 @@ mod tests {
     use super::*;
 
     #[test]
-    fn chunks_cover_the_rows_in_order() {
-        let rows = Rows::from_blocks(3, vec![0..5, 9..12, 20..100]);
-        let chunks = chunk_rows(&rows);
-        assert_eq!(chunks.len(), 30, "88 rows, 3 a chunk");
-        let ys: Vec<u32> = chunks.iter().flat_map(|c| c.ys().collect::<Vec<_>>()).collect();
-        assert_eq!(ys, rows.ys().collect::<Vec<_>>());
-        assert_eq!(chunk_rows(&Rows::full(4, 2)).len(), 2);
+    fn chunks_cover_the_rows_in_order_and_cut_no_tile_block() {
+        let ys = |chunks: &[Rows]| chunks.iter().flat_map(|c| c.ys().collect::<Vec<_>>()).collect::<Vec<_>>();
+        // A whole image: pieces of at least 16 rows, at most CHUNKS of them.
+        let whole = Rows::full(3, 760);
+        let chunks = chunk_rows(&whole);
+        assert!((30..=32).contains(&chunks.len()), "{}", chunks.len());
+        assert!(chunks.iter().all(|c| c.ys().count() >= 16));
+        assert_eq!(ys(&chunks), whole.ys().collect::<Vec<_>>());
+        assert_eq!(chunk_rows(&Rows::full(4, 40)).len(), 2);
+        assert_eq!(chunk_rows(&Rows::full(4, 2)).len(), 1);
+        // A tile of many blocks: its blocks grouped whole.
+        let tile = Rows::tile(5, 760, crate::parts::Split { index: 1, count: 4 }).expect("tile");
+        let chunks = chunk_rows(&tile);
+        assert_eq!(chunks.len(), 32.min(tile.blocks().len()));
+        assert_eq!(ys(&chunks), tile.ys().collect::<Vec<_>>());
+        let blocks: Vec<_> = chunks.iter().flat_map(|c| c.blocks().to_vec()).collect();
+        assert_eq!(blocks, tile.blocks());
     }
 
     #[test]
@@ -432,12 +453,13 @@ mod tests {
         let path = dir.path().join("c.ckpt");
         let rows = Rows::full(2, 64);
         let mut c = Checkpoint::open(&path, "key", &rows).expect("new");
-        let colors = Estimate::Colors(vec![DVec3::new(0.1, -2.0, 1e300); 4]);
+        // Four chunks of 16 rows, 32 pixels each.
+        let colors = Estimate::Colors(vec![DVec3::new(0.1, -2.0, 1e300); 32]);
         let mut sum = ExactSum::default();
         sum.add(DVec3::new(1.0 / 3.0, 7.0, -0.5));
-        let sums = Estimate::Sums(vec![sum; 4], 17);
+        let sums = Estimate::Sums(vec![sum; 32], 17);
         c.save_chunk(0, 3, colors.clone()).expect("saved");
-        c.save_chunk(2, 31, sums.clone()).expect("saved");
+        c.save_chunk(2, 3, sums.clone()).expect("saved");
         let state = SppmState::from_values(
             5,
             &[0.25; 128 * 8],
@@ -447,7 +469,7 @@ mod tests {
         drop(c);
         let c = Checkpoint::open(&path, "key", &rows).expect("reopened");
         assert_eq!(c.chunk(0, 3), Some(&colors));
-        assert_eq!(c.chunk(2, 31), Some(&sums));
+        assert_eq!(c.chunk(2, 3), Some(&sums));
         assert_eq!(c.sppm_state(1), Some(&state));
         assert_eq!(c.resumed(), (2, 5));
         drop(c);
@@ -455,10 +477,10 @@ mod tests {
         // A kill in the middle of appending a record: the record is lost, the others stand.
         let whole = std::fs::read(&path).expect("read");
         let mut cut = whole.clone();
-        cut.extend_from_slice(&chunk_record(0, 4, &colors)[..30]);
+        cut.extend_from_slice(&chunk_record(0, 1, &colors)[..30]);
         std::fs::write(&path, &cut).expect("write");
         let c = Checkpoint::open(&path, "key", &rows).expect("a cut record is dropped");
-        assert_eq!(c.chunk(0, 4), None);
+        assert_eq!(c.chunk(0, 1), None);
         assert_eq!(c.resumed(), (2, 5));
         drop(c);
         assert_eq!(std::fs::read(&path).expect("read"), whole, "rewritten without the cut record");

@@ -19,34 +19,35 @@
 //! Rows are rendered in parallel, but each pixel's random numbers come from its own coordinates,
 //! so the image is the same bit for bit whatever the number of threads.
 //!
-//! The physically based models are driven here too. The path tracer renders any rectangle of
-//! pixels over any range of sample indices ([`path_sums`]): every sample draws from its own stream
-//! (seed, pixel, sample index) and a pixel's samples are summed exactly ([`ExactSum`]), so a
-//! render split into tiles (pixel rectangles) and passes (sample ranges) merges into the same
-//! bytes as one render: a pixel of `N` samples is `sum / N` whatever the grouping of its sums.
-//! SPPM renders any rectangle of pixels ([`crate::integrator::sppm::render`]): its photons draw
-//! from streams of (seed, pass, photon index), the same for every rectangle.
+//! The physically based models are driven here too. The path tracer renders any set of rows
+//! ([`Rows`]) over any range of sample indices ([`path_sums`]): every sample draws from its own
+//! stream (seed, pixel, sample index) and a pixel's samples are summed exactly ([`ExactSum`]), so
+//! a render split into tiles (sets of rows) and passes (sample ranges) merges into the same bytes
+//! as one render: a pixel of `N` samples is `sum / N` whatever the grouping of its sums. SPPM
+//! renders any set of rows ([`crate::integrator::sppm::render`]): its photons draw from streams
+//! of (seed, pass, photon index), the same for every set. [`render_portion`] renders some rows
+//! and some runs of a render ([`RenderSettings::runs`]); [`checkpoint`] keeps its finished work.
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicU64, Ordering};
-
-use rayon::prelude::*;
 
 mod adaptive;
 pub mod checkpoint;
+mod rows;
+mod run;
 
-use adaptive::AdaptiveSampler;
 use checkpoint::{Checkpoint, CheckpointError, Estimate};
+pub use rows::Rows;
+pub use run::{path_sums, run_seed};
+use run::{render_rows_run, render_sppm_run};
 
 use crate::camera::Camera;
 use crate::image_io::Image;
-use crate::integrator::path::{DEFAULT_MAX_DEPTH, PathTracer};
-use crate::integrator::photon::{self, PhotonEstimate, PhotonStats};
-use crate::integrator::sppm::{self, SppmSettings, SppmState, SppmStats};
-use crate::integrator::{Classic, Model};
-use crate::parts::{Split, tile_rows};
+use crate::integrator::Model;
+use crate::integrator::path::DEFAULT_MAX_DEPTH;
+use crate::integrator::photon::{self, PhotonStats};
+use crate::integrator::sppm::{self, SppmSettings, SppmStats};
 use crate::prepare::{Hit, PreparedScene};
-use crate::sampler::{ExactSum, PixelRng, hash_values, stream};
+use crate::sampler::ExactSum;
 use crate::scene::{Algorithm, Diagnostic, PhotonSettings, check_image_size};
 
 /// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
@@ -427,160 +428,6 @@ pub fn render_portion_resumable(
     })
 }
 
-/// The seed of run `run`: the render's seed for the first run (so that a render of one run is the
-/// render as it always was), one derived from it and the run for the others.
-pub fn run_seed(seed: u64, run: u32) -> u64 {
-    if run == 0 { seed } else { hash_values(&[seed, stream::RUN, run as u64]) }
-}
-
-/// Run `run` of the classic, photon or path model over `rows`: in one go, or with a checkpoint in
-/// [`checkpoint::CHUNKS`] chunks of rows, each saved as it finishes and taken from the checkpoint
-/// when an earlier render saved it.
-fn render_rows_run(
-    scene: &PreparedScene,
-    settings: &RenderSettings,
-    rows: &Rows,
-    run: u32,
-    progress: &(dyn Fn(Progress) + Sync),
-    mut checkpoint: Option<&mut Checkpoint>,
-) -> Result<(Estimate, RenderStats), RenderError> {
-    let seed = run_seed(settings.seed, run);
-    let chunks = match checkpoint {
-        Some(_) => checkpoint::chunk_rows(rows),
-        None => vec![rows.clone()],
-    };
-    let chunked = chunks.len() > 1;
-    // A chunk's progress is reported as chunks done, not as its own stages.
-    let chunk_progress = |p: Progress| {
-        if !chunked || matches!(p.stage, Stage::TracingPhotons | Stage::BuildingPhotonMap) {
-            progress(p);
-        }
-    };
-    let photon_settings = settings.photon_settings(scene);
-    // The photon map, built when the first chunk that needs it is rendered.
-    let mut photon_map = None;
-    let mut stats = RenderStats::default();
-    let mut estimates = Vec::with_capacity(chunks.len());
-    for (i, chunk) in chunks.iter().enumerate() {
-        let saved = checkpoint.as_deref().and_then(|c| c.chunk(run, i as u32));
-        let estimate = match saved {
-            Some(estimate) => estimate.clone(),
-            None => {
-                let (estimate, chunk_stats) = match settings.model {
-                    Model::Path => {
-                        // Runs of the path tracer are ranges of sample indices: `--spp` samples each.
-                        let spp = settings.path_spp() as u64;
-                        let samples = run as u64 * spp..(run as u64 + 1) * spp;
-                        let total = chunk.len() as u64 * spp;
-                        let report = |done| chunk_progress(Progress { stage: Stage::Sampling, done, total });
-                        report(0);
-                        let (sums, rays) = path_sums(scene, settings, chunk, samples, &report);
-                        (
-                            Estimate::Sums(sums, spp),
-                            RenderStats { rays, camera_samples: total, ..RenderStats::default() },
-                        )
-                    }
-                    Model::Photon => {
-                        let (map, photon_stats) = photon_map.get_or_insert_with(|| {
-                            let report = |done, total| {
-                                chunk_progress(Progress { stage: Stage::TracingPhotons, done, total })
-                            };
-                            let built = photon::build_photon_map(scene, &photon_settings, seed, &report);
-                            chunk_progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
-                            built
-                        });
-                        let integrator =
-                            Classic::with_photons(scene, PhotonEstimate::new(map, &photon_settings));
-                        let (colors, mut chunk_stats) =
-                            AdaptiveSampler::new(scene, integrator, settings, seed)
-                                .run(chunk, &chunk_progress);
-                        // The map's making counts once, with its first chunk.
-                        if stats.photons.is_none() {
-                            chunk_stats.photons = Some(*photon_stats);
-                        }
-                        (Estimate::Colors(colors), chunk_stats)
-                    }
-                    Model::Classic => {
-                        let (colors, chunk_stats) =
-                            AdaptiveSampler::new(scene, Classic::new(scene), settings, seed)
-                                .run(chunk, &chunk_progress);
-                        (Estimate::Colors(colors), chunk_stats)
-                    }
-                    Model::Sppm => unreachable!("SPPM runs are rendered by render_sppm_run"),
-                };
-                stats.add(&chunk_stats);
-                if let Some(c) = checkpoint.as_deref_mut() {
-                    c.save_chunk(run, i as u32, estimate.clone()).map_err(RenderError::Checkpoint)?;
-                }
-                estimate
-            }
-        };
-        if chunked {
-            progress(Progress { stage: Stage::Chunks, done: i as u64 + 1, total: chunks.len() as u64 });
-        }
-        estimates.push(estimate);
-    }
-    Ok((concatenate(estimates), stats))
-}
-
-/// The estimates of consecutive chunks of rows as one.
-fn concatenate(estimates: Vec<Estimate>) -> Estimate {
-    let mut estimates = estimates.into_iter();
-    let Some(mut all) = estimates.next() else {
-        return Estimate::Colors(Vec::new());
-    };
-    for next in estimates {
-        match (&mut all, next) {
-            (Estimate::Colors(all), Estimate::Colors(more)) => all.extend(more),
-            (Estimate::Sums(all, _), Estimate::Sums(more, _)) => all.extend(more),
-            _ => unreachable!("the chunks of a run are estimated alike"),
-        }
-    }
-    all
-}
-
-/// Run `run` of SPPM over `rows`, from the state a checkpoint saved if there is one, saving its
-/// state there after passes.
-fn render_sppm_run(
-    scene: &PreparedScene,
-    settings: &RenderSettings,
-    rows: &Rows,
-    run: u32,
-    progress: &(dyn Fn(Progress) + Sync),
-    mut checkpoint: Option<&mut Checkpoint>,
-) -> Result<(Estimate, RenderStats), RenderError> {
-    let sppm_settings = SppmSettings { seed: run_seed(settings.seed, run), ..settings.sppm_settings(scene) };
-    let camera = camera_for(scene, settings);
-    let total = sppm_settings.passes;
-    let start = checkpoint
-        .as_deref()
-        .and_then(|c| c.sppm_state(run))
-        .cloned()
-        .unwrap_or_else(|| SppmState::new(rows.len()));
-    progress(Progress { stage: Stage::Passes, done: start.passes_done, total });
-    let report = |done| progress(Progress { stage: Stage::Passes, done, total });
-    let mut failure = None;
-    let mut after_pass = |state: &SppmState| {
-        if let Some(c) = checkpoint.as_deref_mut()
-            && failure.is_none()
-        {
-            failure = c.save_sppm(run, state).err();
-        }
-    };
-    let (colors, sppm_stats) =
-        sppm::render_from(scene, &camera, &sppm_settings, rows, start, &mut after_pass, &report);
-    if let Some(error) = failure {
-        return Err(RenderError::Checkpoint(error));
-    }
-    let stats = RenderStats {
-        rays: sppm_stats.rays,
-        camera_samples: rows.len() as u64 * sppm_stats.passes,
-        sppm: Some(sppm_stats),
-        ..RenderStats::default()
-    };
-    Ok((Estimate::Colors(colors), stats))
-}
-
 /// The camera of a render: the scene's, at the settings' size, focused at `focal_dist=` or (a
 /// lens without it) on the surface seen at the image centre.
 pub fn camera_for(scene: &PreparedScene, settings: &RenderSettings) -> Camera {
@@ -596,126 +443,4 @@ pub fn camera_for(scene: &PreparedScene, settings: &RenderSettings) -> Camera {
         1.0
     };
     Camera::new(cam, w, h, focus)
-}
-
-/// A set of whole rows of an image `width` pixels wide, as blocks of consecutive rows in
-/// increasing order: what a render, or a tile of one ([`Rows::tile`]), computes.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Rows {
-    width: u32,
-    blocks: Vec<Range<u32>>,
-}
-
-impl Rows {
-    /// Every row of a `width x height` image.
-    pub fn full(width: u32, height: u32) -> Rows {
-        Rows::from_blocks(width, std::iter::once(0..height).collect())
-    }
-
-    /// The rows of tile `tile` of a `width x height` image ([`crate::parts::tile_rows`]).
-    pub fn tile(width: u32, height: u32, tile: Split) -> Result<Rows, String> {
-        Ok(Rows { width, blocks: tile_rows(height, tile)? })
-    }
-
-    /// Blocks of `width`-pixel rows, increasing, not overlapping (empty blocks are dropped).
-    pub fn from_blocks(width: u32, blocks: Vec<Range<u32>>) -> Rows {
-        let blocks: Vec<Range<u32>> = blocks.into_iter().filter(|b| !b.is_empty()).collect();
-        debug_assert!(blocks.windows(2).all(|w| w[0].end <= w[1].start), "{blocks:?}");
-        Rows { width, blocks }
-    }
-
-    /// The width of a row in pixels.
-    pub fn width(&self) -> u32 {
-        self.width
-    }
-
-    /// The blocks of rows, top first.
-    pub fn blocks(&self) -> &[Range<u32>] {
-        &self.blocks
-    }
-
-    /// Every row, top first.
-    pub fn ys(&self) -> impl Iterator<Item = u32> + '_ {
-        self.blocks.iter().flat_map(|b| b.clone())
-    }
-
-    /// The number of pixels.
-    pub fn len(&self) -> usize {
-        self.blocks.iter().map(|b| b.len()).sum::<usize>() * self.width as usize
-    }
-
-    /// Whether there is no pixel.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Every row with the rows just above and below it that an image `height` rows high has,
-    /// top first, each once.
-    pub(crate) fn with_neighbours(&self, height: u32) -> Vec<u32> {
-        let mut out: Vec<u32> = Vec::new();
-        for b in &self.blocks {
-            for y in b.start.saturating_sub(1)..(b.end + 1).min(height) {
-                if out.last().is_none_or(|&last| last < y) {
-                    out.push(y);
-                }
-            }
-        }
-        out
-    }
-}
-
-/// The exact sums of the path tracer's samples `samples` (sample indices) of every pixel of
-/// `rows` (in the order of [`Rows::ys`]), and the rays traced. Sample `s` of pixel `(x, y)` draws
-/// from its own stream (seed, pixel, `s`), so sums of disjoint sample ranges and rows merge
-/// ([`ExactSum::merge`]) into exactly the sums of one render. `progress(done)` reports samples
-/// finished (pixels times samples) from worker threads.
-pub fn path_sums(
-    scene: &PreparedScene,
-    settings: &RenderSettings,
-    rows: &Rows,
-    samples: Range<u64>,
-    progress: &(dyn Fn(u64) + Sync),
-) -> (Vec<ExactSum>, u64) {
-    let camera = camera_for(scene, settings);
-    let tracer = PathTracer::new(scene, settings.max_depth);
-    let width = rows.width() as usize;
-    let ys: Vec<u32> = rows.ys().collect();
-    let mut sums = vec![ExactSum::default(); rows.len()];
-    let rays = AtomicU64::new(0);
-    let done = AtomicU64::new(0);
-    let per_row = width as u64 * (samples.end.saturating_sub(samples.start));
-    if width > 0 {
-        sums.par_chunks_mut(width).enumerate().for_each(|(row, sums)| {
-            let y = ys[row];
-            let mut row_rays = 0;
-            for (x, sum) in sums.iter_mut().enumerate() {
-                let x = x as u32;
-                for s in samples.clone() {
-                    let mut rng = PixelRng::for_sample(settings.seed, stream::PATH, x, y, s);
-                    let (dx, dy) = (rng.uniform(), rng.uniform());
-                    let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
-                    let result = tracer.radiance(camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
-                    sum.add(result.radiance);
-                    row_rays += result.rays;
-                }
-            }
-            rays.fetch_add(row_rays, Ordering::Relaxed);
-            progress(done.fetch_add(per_row, Ordering::Relaxed) + per_row);
-        });
-    }
-    (sums, rays.load(Ordering::Relaxed))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn rows_with_their_neighbours() {
-        let rows = Rows::from_blocks(4, vec![0..2, 5..6, 7..9]);
-        assert_eq!(rows.with_neighbours(9), [0, 1, 2, 4, 5, 6, 7, 8]);
-        assert_eq!(rows.ys().collect::<Vec<_>>(), [0, 1, 5, 7, 8]);
-        assert_eq!(rows.len(), 20);
-        assert_eq!(Rows::full(3, 5).with_neighbours(5), [0, 1, 2, 3, 4]);
-    }
 }
