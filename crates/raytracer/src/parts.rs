@@ -43,19 +43,25 @@ use crate::scene::MAX_IMAGE_SIDE;
 
 /// The most rows in one block of a tile.
 pub const MAX_TILE_BLOCK_ROWS: u32 = 16;
-/// The fewest blocks a tile gets when the image is high enough.
+/// The fewest rows in one block of a tile when the tile has that many rows.
+pub const MIN_TILE_BLOCK_ROWS: u32 = 8;
+/// The blocks a tile gets when the image is high enough and blocks are not too small.
 pub const BLOCKS_PER_TILE: u32 = 6;
 
 /// The rows in each block of an image `height` rows high cut into `tiles` tiles: as many as make
-/// [`BLOCKS_PER_TILE`] blocks a tile, from 1 to [`MAX_TILE_BLOCK_ROWS`].
+/// [`BLOCKS_PER_TILE`] blocks a tile, from [`MIN_TILE_BLOCK_ROWS`] (or a tile's share of the rows,
+/// if less) to [`MAX_TILE_BLOCK_ROWS`].
 ///
 /// Chosen by measurement (`cargo bench -p raytracer --bench tiles`, rays traced by each tile of
-/// four scenes): smaller blocks share the work more evenly, but with adaptive anti-aliasing each
-/// block traces the rows above and below it again (its first pass compares every pixel with its
-/// neighbours), and the first pass is most of a render's rays. About six blocks a tile is where
-/// the largest tile's work is least for 4 to 16 tiles.
+/// four scenes; the README has the table): smaller blocks share the work more evenly, but with
+/// adaptive anti-aliasing each block traces the rows above and below it again (its first pass
+/// compares every pixel with its neighbours), and the first pass is most of a render's rays.
+/// About six blocks a tile is where the largest tile's work is least for 4 and 8 tiles; with more
+/// tiles, blocks under 8 rows lose more to the rows traced again than they gain in balance.
 pub fn tile_block_rows(height: u32, tiles: u32) -> u32 {
-    (height / (BLOCKS_PER_TILE * tiles.max(1))).clamp(1, MAX_TILE_BLOCK_ROWS)
+    let tiles = tiles.max(1);
+    let least = MIN_TILE_BLOCK_ROWS.min(height / tiles).max(1);
+    (height / (BLOCKS_PER_TILE * tiles)).clamp(least, MAX_TILE_BLOCK_ROWS)
 }
 
 /// Part `index` of `count` (`K/N` on the command line, `K` from 0).
