@@ -4,8 +4,10 @@
 //! engine (`crates/terrain`). The libraries never print or exit; this binary turns their values,
 //! errors and progress callbacks into terminal output and exit codes.
 
+mod merge;
 mod render;
 mod size;
+mod split;
 mod terrain;
 
 use std::process::ExitCode;
@@ -24,6 +26,8 @@ struct Cli {
 enum Command {
     /// Render a scene file (course scene language) to an image.
     Render(render::RenderArgs),
+    /// Merge the part files of a render split with `render --tile` or `--pass` into one image.
+    Merge(merge::MergeArgs),
     /// Explore the terrain engine's island in a window, or render one frame off-screen.
     Terrain(terrain::TerrainArgs),
 }
@@ -52,6 +56,7 @@ fn main() -> ExitCode {
     stop_on_interrupt();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Merge(args) => merge::run(args),
         Command::Terrain(args) => terrain::run(args),
     };
     match result {

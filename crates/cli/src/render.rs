@@ -5,13 +5,17 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
-use raytracer::image_io::{OutputFormat, check_output, write_image};
+use raytracer::image_io::{Image, OutputFormat, check_output, write_image};
 use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::sppm::SppmStats;
 use raytracer::integrator::{Model, choose_model};
 use raytracer::memory::parse_byte_size;
-use raytracer::render::{DEFAULT_PATH_SPP, MAX_DEPTH_LIMIT, MAX_SPP, Progress, RenderStats, Stage};
+use raytracer::parts::{self, Part, PartHeader, Split};
+use raytracer::render::{
+    DEFAULT_PATH_SPP, MAX_DEPTH_LIMIT, MAX_RUNS, MAX_SPP, PortionPixels, Progress, RenderStats, Rows, Stage,
+    render_portion_resumable,
+};
 use raytracer::scene::{self, Diagnostic, MAX_EMITTED_PHOTONS, MAX_KEPT_DIAGNOSTICS, Omitted, SourceFile};
 use raytracer::{MemoryBudget, PreparedScene, RenderSettings, Sampling, TextureSearch};
 
@@ -29,6 +33,8 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render caustics.txt --model photon --photons 500000\n  \
     rayterra render cornell-box.txt --model path --spp 256 -o out.exr\n  \
     rayterra render caustics.txt --model sppm --passes 64 --photons 200000\n  \
+    rayterra render scene.txt --tile 2/8 -o part-2.exr   one of 8 tiles, for rayterra merge\n  \
+    rayterra render scene.txt --model path --spp 64 --pass auto/16 -o pass.exr   in an array job\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
     /// Scene file in the course scene language; without it, the built-in showcase scene.
@@ -77,9 +83,34 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=MAX_EMITTED_PHOTONS))]
     pub photons: Option<u64>,
 
-    /// Passes of the sppm model, instead of the scene's `iterations=`.
+    /// Classic, photon and path models: independent passes, averaged (as --runs; for the path
+    /// model N passes of --spp samples are a render of N x spp samples). Sppm: its passes, instead
+    /// of the scene's `iterations=`.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=scene::MAX_ITERATIONS))]
     pub passes: Option<u64>,
+
+    /// Independent runs of the render, each with its own random numbers, averaged: what N parts
+    /// rendered with `--pass K/N` merge into. Any model (for sppm, whole SPPM renders).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_RUNS as i64))]
+    pub runs: Option<u32>,
+
+    /// Render tile K of N only (K from 0; interleaved blocks of rows) and write it as a part file
+    /// (.exr) for `rayterra merge`. `auto`: K and N of a Slurm array task (SLURM_ARRAY_TASK_ID,
+    /// SLURM_ARRAY_TASK_COUNT); `auto/N`: K from SLURM_ARRAY_TASK_ID or a Kubernetes Indexed
+    /// Job's JOB_COMPLETION_INDEX.
+    #[arg(long, value_name = "K/N|auto|auto/N")]
+    pub tile: Option<String>,
+
+    /// Render pass K of N independent passes only (its own random numbers; see --runs) and write
+    /// it as a part file (.exr) for `rayterra merge`; `auto` as for --tile. Combines with --tile.
+    #[arg(long, value_name = "K/N|auto|auto/N")]
+    pub pass: Option<String>,
+
+    /// Keep the finished work in FILE while rendering, and go on from it if FILE exists (a render
+    /// killed by a time limit, resubmitted): the image is the same bit for bit. FILE is removed
+    /// once the output is written.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
 
     /// Longest light path of the path and sppm models, in segments (1: lights seen directly; 2:
     /// direct light; ...).
@@ -119,6 +150,26 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     // A bad output path or format is found before any work, not after the render.
     let format = if args.check { OutputFormat::from_path(&args.output) } else { check_output(&args.output) }
         .map_err(|e| fail(&e.to_string()))?;
+    let env = |name: &str| std::env::var(name).ok();
+    let tile = args
+        .tile
+        .as_deref()
+        .map(|t| crate::split::resolve(t, "tile", env))
+        .transpose()
+        .map_err(|e| fail(&e))?;
+    let pass = args
+        .pass
+        .as_deref()
+        .map(|p| crate::split::resolve(p, "pass", env))
+        .transpose()
+        .map_err(|e| fail(&e))?;
+    let is_part = tile.is_some() || pass.is_some();
+    if is_part && format != OutputFormat::Exr {
+        return Err(fail(&format!(
+            "a tile or pass is written as a part file for `rayterra merge`: name the output `.exr`, not `{}`",
+            args.output.display()
+        )));
+    }
     let source = match &args.scene {
         Some(path) => SourceFile::read(path).map_err(|e| fail(&e.to_string()))?,
         None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
@@ -177,8 +228,8 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         settings.sampling = Sampling::Adaptive;
     }
     settings.photons = args.photons;
-    settings.passes = args.passes;
     settings.max_depth = args.max_depth;
+    (settings.passes, settings.runs) = passes_and_runs(&args, model, pass).map_err(|e| fail(&e))?;
     warn_unused_options(&args, model);
     // The photon map gets what the textures left of the memory limit.
     settings.memory_limit = budget.remaining();
@@ -235,6 +286,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
             Stage::Refining => "refining pixels",
             Stage::Sampling => "samples",
             Stage::Passes => "passes",
+            Stage::Chunks => "chunks",
         };
         if bar.message() != message {
             bar.set_message(message);
@@ -246,13 +298,62 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
             bar.set_position(p.done);
         }
     };
+    let (w, h) = (settings.width, settings.height);
+    let runs = pass.map_or(0..settings.runs, |p| p.index..p.index + 1);
+    let tile = tile.unwrap_or(Split::WHOLE);
+    let pass = pass.unwrap_or(Split::WHOLE);
+    // A part file holds its rows in the blocks of its tile (one tile: the whole image).
+    let rows = if is_part {
+        Rows::tile(w, h, tile).map_err(|e| fail(&format!("--tile {tile}: {e}")))?
+    } else {
+        Rows::full(w, h)
+    };
+    // What the part (or checkpoint) belongs to.
+    let scene_digest = if is_part || args.checkpoint.is_some() {
+        crate::split::scene_digest(&source, &prepared.inputs).map_err(|e| fail(&e))?
+    } else {
+        String::new()
+    };
+    let settings_line = crate::split::settings_line(&settings);
+    let mut checkpoint = match &args.checkpoint {
+        Some(path) => {
+            let key = format!("scene {scene_digest}\nsettings {settings_line}\ntile {tile}\npass {pass}");
+            Some(crate::split::open_checkpoint(path, &key, &rows).map_err(|e| fail(&e))?)
+        }
+        None => None,
+    };
     let render_started = Instant::now();
-    let rendered = raytracer::render(&prepared, &settings, &report).map_err(|e| fail(&e.to_string()))?;
+    let portion = render_portion_resumable(&prepared, &settings, &rows, runs, &report, checkpoint.as_mut())
+        .map_err(|e| fail(&e.to_string()))?;
     let render_time = render_started.elapsed();
     bar.finish_and_clear();
+    let stats = portion.stats;
 
-    write_image(&rendered.image, &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
-    if let Some(p) = rendered.stats.photons.filter(|p| p.emitted < p.requested) {
+    if is_part {
+        let header = PartHeader {
+            width: w,
+            height: h,
+            scene: scene_digest,
+            settings: settings_line,
+            tile,
+            pass,
+            samples: 1,
+        };
+        let part = Part::from_portion(header, &rows, portion.pixels);
+        parts::write_part(&part, &args.output).map_err(|e| fail(&e.to_string()))?;
+    } else {
+        let PortionPixels::Final(pixels) = portion.pixels else {
+            return Err(fail("internal error: a whole render gave partial sums"));
+        };
+        write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
+    }
+    if let Some(checkpoint) = checkpoint {
+        let path = checkpoint.path().to_path_buf();
+        if let Err(e) = checkpoint.remove() {
+            eprintln!("warning: the render is written, but its checkpoint `{}` stays: {e}", path.display());
+        }
+    }
+    if let Some(p) = stats.photons.filter(|p| p.emitted < p.requested) {
         eprintln!(
             "warning: the photon map was full (`max_photons= {}`) after {} of the {} photons; the estimate \
              still divides by all {} (as the course's renderer does), so the image is about {:.1} times \
@@ -266,9 +367,49 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         );
     }
     if !args.quiet {
-        print_summary(&args.output, &settings, &rendered.stats, prepare_time, render_time);
+        let pixels = if is_part {
+            format!("{} of {w}x{h} pixels (tile {tile}, pass {pass})", rows.len())
+        } else {
+            format!("{w}x{h} pixels")
+        };
+        print_summary(&args.output, &pixels, &settings, &stats, prepare_time, render_time);
     }
     Ok(())
+}
+
+/// The sppm model's passes and the render's independent runs, from `--passes`, `--runs` and
+/// `--pass K/N` (which renders one of `N` runs).
+fn passes_and_runs(
+    args: &RenderArgs,
+    model: Model,
+    pass: Option<Split>,
+) -> Result<(Option<u64>, u32), String> {
+    let (sppm_passes, passes_as_runs) = match model {
+        Model::Sppm => (args.passes, None),
+        _ => (None, args.passes),
+    };
+    let mut runs = args.runs.map(|n| (n, "--runs"));
+    if let Some(n) = passes_as_runs {
+        let n = u32::try_from(n).ok().filter(|&n| n <= MAX_RUNS).ok_or_else(|| {
+            format!("--passes {n}: the {} model averages at most {MAX_RUNS} passes", model.name())
+        })?;
+        match runs {
+            Some((r, _)) if r != n => return Err(format!("--passes {n} and --runs {r} disagree: give one")),
+            _ => runs = Some((n, "--passes")),
+        }
+    }
+    if let Some(pass) = pass {
+        match runs {
+            Some((r, flag)) if r != pass.count => {
+                return Err(format!(
+                    "--pass {pass} renders one of {} passes, but {flag} says {r}: give one",
+                    pass.count
+                ));
+            }
+            _ => runs = Some((pass.count, "--pass")),
+        }
+    }
+    Ok((sppm_passes, runs.map_or(1, |(n, _)| n)))
 }
 
 /// Warns about options the chosen model does not read.
@@ -276,9 +417,6 @@ fn warn_unused_options(args: &RenderArgs, model: Model) {
     let name = model.name();
     if args.photons.is_some() && !model.uses_photons() {
         eprintln!("warning: --photons has no effect on the {name} model");
-    }
-    if args.passes.is_some() && model != Model::Sppm {
-        eprintln!("warning: --passes has no effect on the {name} model (only on sppm)");
     }
     if args.max_depth != DEFAULT_MAX_DEPTH && !model.is_physically_based() {
         eprintln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
@@ -304,8 +442,10 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     bar
 }
 
+/// The summary of a render of `pixels` (what was rendered, as words).
 fn print_summary(
     output: &Path,
+    pixels: &str,
     settings: &RenderSettings,
     stats: &RenderStats,
     prepare: Duration,
@@ -313,7 +453,7 @@ fn print_summary(
 ) {
     println!("wrote {}", output.display());
     if settings.model.is_physically_based() {
-        print_physical_summary(settings, stats, prepare, render);
+        print_physical_summary(pixels, settings, stats, prepare, render);
         return;
     }
     // The photon phase is reported on its own line; the pixel phase is the rest.
@@ -324,9 +464,7 @@ fn print_summary(
     let seconds = render.saturating_sub(photon_phase).as_secs_f64().max(1e-9);
     let rays_per_second = stats.rays as f64 / seconds;
     println!(
-        "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
-        settings.width,
-        settings.height,
+        "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
         seconds,
         prepare.as_secs_f64(),
         stats.threads,
@@ -350,6 +488,7 @@ fn print_summary(
 
 /// The summary of a path or SPPM render: samples (or passes and photons) a second.
 fn print_physical_summary(
+    pixels: &str,
     settings: &RenderSettings,
     stats: &RenderStats,
     prepare: Duration,
@@ -358,9 +497,7 @@ fn print_physical_summary(
     let seconds = render.as_secs_f64().max(1e-9);
     let threads = stats.threads.max(1) as f64;
     println!(
-        "{}x{} pixels in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
-        settings.width,
-        settings.height,
+        "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
         seconds,
         prepare.as_secs_f64(),
         stats.threads,
@@ -381,13 +518,14 @@ fn print_physical_summary(
         None => {
             let spp = settings.path_spp();
             let rate = stats.camera_samples as f64 / seconds;
+            let default = spp == DEFAULT_PATH_SPP && settings.sampling == Sampling::Adaptive;
+            let passes = match settings.runs {
+                1 => String::new(),
+                n => format!(" in each of {n} passes"),
+            };
             println!(
-                "{spp} samples a pixel{}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
-                if spp == DEFAULT_PATH_SPP && settings.sampling == Sampling::Adaptive {
-                    " (default)"
-                } else {
-                    ""
-                },
+                "{spp} samples a pixel{}{passes}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
+                if default { " (default)" } else { "" },
                 stats.camera_samples,
                 rate / 1e6,
                 rate / 1e6 / threads

@@ -371,12 +371,8 @@ fn the_sppm_model_reports_passes_and_photons_and_warns_about_unused_options() {
     assert!(stdout.contains("3 passes of 4000 photons (12000 emitted"), "{stdout}");
     assert!(stdout.contains("passes/s") && stdout.contains("M photons/s"), "{stdout}");
     assert!(text(&out.stderr).contains("--spp has no effect on the sppm model"), "{}", text(&out.stderr));
-    let out = rayterra(
-        &["render", "scene.txt", "--passes", "3", "--max-depth", "4", "-q", "-o", "c.png"],
-        dir.path(),
-    );
+    let out = rayterra(&["render", "scene.txt", "--max-depth", "4", "-q", "-o", "c.png"], dir.path());
     let stderr = text(&out.stderr);
-    assert!(stderr.contains("--passes has no effect on the classic model"), "{stderr}");
     assert!(stderr.contains("--max-depth has no effect on the classic model"), "{stderr}");
 }
 

@@ -19,6 +19,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod memory;
+pub mod parts;
 pub mod prepare;
 pub mod procedural;
 pub mod render;

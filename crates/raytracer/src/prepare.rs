@@ -143,6 +143,9 @@ pub struct PreparedScene {
     pub diagnostics: Vec<Diagnostic>,
     /// Bytes of the memory budget the scene's textures keep.
     pub memory_used: u64,
+    /// The files read besides the scene file (mesh files and their material libraries, then
+    /// textures), in the order of the scene: what its pixels depend on.
+    pub inputs: Vec<PathBuf>,
     /// Loaded and generated textures.
     textures: Vec<Texture>,
     /// For each primitive, the indices of its texture and of its normal map ([`NO_TEXTURE`]:
@@ -188,7 +191,8 @@ impl PreparedScene {
     ) -> Result<PreparedScene, Vec<Diagnostic>> {
         let mut diagnostics = Vec::new();
         let mut errors = Vec::new();
-        load_meshes(&mut scene, search, &mut diagnostics, &mut errors);
+        let mut inputs = Vec::new();
+        load_meshes(&mut scene, search, &mut inputs, &mut diagnostics, &mut errors);
 
         // Distinct texture sources (colour textures and normal maps), each loaded once, in
         // parallel.
@@ -220,6 +224,10 @@ impl PreparedScene {
             }
         };
         diagnostics.extend(notes);
+        inputs.extend(sources.iter().filter_map(|t| match &t.source {
+            TextureSource::File(name) => search.resolve(name).ok(),
+            TextureSource::Builtin(_) => None,
+        }));
 
         let mut bounded: Vec<u32> = Vec::new();
         let mut linear = Vec::new();
@@ -257,6 +265,7 @@ impl PreparedScene {
             texture_of,
             diagnostics,
             memory_used,
+            inputs,
             scene,
         })
     }
@@ -562,6 +571,7 @@ impl FlatSet {
 fn load_meshes(
     scene: &mut Scene,
     search: &TextureSearch,
+    inputs: &mut Vec<PathBuf>,
     diagnostics: &mut Vec<Diagnostic>,
     errors: &mut Vec<Diagnostic>,
 ) {
@@ -577,11 +587,14 @@ fn load_meshes(
     if files.is_empty() {
         return;
     }
-    let loaded: Vec<(usize, Result<LoadedObj, Diagnostic>)> = files
+    type Loaded = Result<(PathBuf, LoadedObj), Diagnostic>;
+    let loaded: Vec<(usize, Loaded)> = files
         .par_iter()
         .map(|&(i, file)| {
             let result = match search.resolve(&file.path) {
-                Ok(path) => load_obj(&path, &file.transform).map_err(|e| obj_diagnostic(&file.location, e)),
+                Ok(path) => load_obj(&path, &file.transform)
+                    .map(|obj| (path, obj))
+                    .map_err(|e| obj_diagnostic(&file.location, e)),
                 Err(TextureError::NotFound { searched, .. }) => Err(Diagnostic {
                     severity: Severity::Error,
                     message: format!(
@@ -610,7 +623,9 @@ fn load_meshes(
             _ => continue,
         };
         match result {
-            Ok(obj) => {
+            Ok((path, obj)) => {
+                inputs.push(path);
+                inputs.extend(obj.material_libraries.iter().filter(|p| p.is_file()).cloned());
                 for w in &obj.warnings {
                     diagnostics.push(Diagnostic {
                         severity: Severity::Warning,

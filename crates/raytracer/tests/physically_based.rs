@@ -8,7 +8,8 @@ mod support;
 use glam::DVec3;
 use raytracer::integrator::Model;
 use raytracer::integrator::sppm::{self, SppmSettings};
-use raytracer::render::{PixelRect, RenderSettings, Sampling, camera_for, path_sums};
+use raytracer::parts::Split;
+use raytracer::render::{RenderSettings, Rows, Sampling, camera_for, path_sums};
 use raytracer::sampler::ExactSum;
 use support::pbr::{Halves, compare, path_halves, render_model};
 use support::{from_text, load, workspace};
@@ -151,18 +152,18 @@ fn tiles_and_sample_ranges_merge_into_the_same_values() {
     let scene = from_text(&text.replace("    image_H= 480\n", "    image_H= 480\n    aperture= 0.05\n"));
     let settings =
         RenderSettings { width: 16, height: 12, model: Model::Path, ..RenderSettings::for_scene(&scene) };
-    let full = PixelRect::full(16, 12);
-    let (whole, _) = path_sums(&scene, &settings, full, 0..8, &|_| {});
+    let full = Rows::full(16, 12);
+    let (whole, _) = path_sums(&scene, &settings, &full, 0..8, &|_| {});
     // Passes: samples 0..3, 3..8.
-    let (mut merged, _) = path_sums(&scene, &settings, full, 0..3, &|_| {});
-    let (rest, _) = path_sums(&scene, &settings, full, 3..8, &|_| {});
+    let (mut merged, _) = path_sums(&scene, &settings, &full, 0..3, &|_| {});
+    let (rest, _) = path_sums(&scene, &settings, &full, 3..8, &|_| {});
     merged.iter_mut().zip(&rest).for_each(|(a, b)| a.merge(b));
     assert_eq!(whole, merged, "sample ranges must merge exactly");
-    // Tiles: a rectangle renders its pixels exactly as the whole image does.
-    let tile = PixelRect { x0: 5, y0: 3, x1: 11, y1: 9 };
-    let (part, _) = path_sums(&scene, &settings, tile, 0..8, &|_| {});
+    // Tiles: a tile's rows render exactly as in the whole image.
+    let tile = Rows::tile(16, 12, Split { index: 1, count: 3 }).expect("tile");
+    let (part, _) = path_sums(&scene, &settings, &tile, 0..8, &|_| {});
     for (i, sum) in part.iter().enumerate() {
-        let (x, y) = (tile.x0 as usize + i % 6, tile.y0 as usize + i / 6);
+        let (x, y) = (i % 16, tile.ys().nth(i / 16).expect("row") as usize);
         assert_eq!(*sum, whole[y * 16 + x], "pixel ({x}, {y})");
     }
     // The image is the mean of the sums.
@@ -175,18 +176,18 @@ fn tiles_and_sample_ranges_merge_into_the_same_values() {
     .image;
     let means: Vec<[f32; 3]> = whole.iter().map(|s: &ExactSum| s.mean(8).as_vec3().to_array()).collect();
     assert!(image.pixels() == means.as_slice());
-    // SPPM: a rectangle of pixels renders as in the whole image.
+    // SPPM: a tile's rows render as in the whole image.
     let sppm_settings = SppmSettings {
         passes: 2,
         photons: 2000,
         ..SppmSettings::new(&scene.scene.camera.photons, false, None, 10, 0)
     };
     let camera = camera_for(&scene, &settings);
-    let (all, _) = sppm::render(&scene, &camera, &sppm_settings, 16, PixelRect::full(16, 12), &|_| {});
-    let corner_rect = PixelRect { x0: 8, y0: 6, x1: 16, y1: 12 };
-    let (corner, _) = sppm::render(&scene, &camera, &sppm_settings, 16, corner_rect, &|_| {});
-    for (i, c) in corner.iter().enumerate() {
-        let (x, y) = (8 + i % 8, 6 + i / 8);
+    let (all, _) = sppm::render(&scene, &camera, &sppm_settings, &Rows::full(16, 12), &|_| {});
+    let rows = Rows::from_blocks(16, vec![2..3, 6..12]);
+    let (part, _) = sppm::render(&scene, &camera, &sppm_settings, &rows, &|_| {});
+    for (i, c) in part.iter().enumerate() {
+        let (x, y) = (i % 16, rows.ys().nth(i / 16).expect("row") as usize);
         assert_eq!(*c, all[y * 16 + x], "sppm pixel ({x}, {y})");
     }
 }

@@ -9,7 +9,7 @@
 //! problem is reported with the OBJ file's own line.
 
 use std::io::{BufRead, Read};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
@@ -78,6 +78,8 @@ pub struct LoadedObj {
     pub groups: Vec<(Option<DVec3>, Vec<TriangleIndices>)>,
     /// Things worth a warning (a material library that cannot be read, unknown materials).
     pub warnings: Vec<String>,
+    /// The material libraries read (or tried), beside the OBJ file.
+    pub material_libraries: Vec<PathBuf>,
 }
 
 impl LoadedObj {
@@ -121,8 +123,13 @@ pub fn load_obj(path: &Path, transform: &MeshTransform) -> Result<LoadedObj, Obj
     let mut reader = LineReader { data: text.as_bytes(), pos: 0 };
     let options =
         tobj::LoadOptions { triangulate: true, single_index: false, ignore_points: true, ignore_lines: true };
-    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |p| tobj::load_mtl(dir.join(p)))
-        .map_err(|e| fail(Some(reader.line()), format!("{e}")))?;
+    let material_libraries = std::cell::RefCell::new(Vec::new());
+    let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |p| {
+        material_libraries.borrow_mut().push(dir.join(p));
+        tobj::load_mtl(dir.join(p))
+    })
+    .map_err(|e| fail(Some(reader.line()), format!("{e}")))?;
+    let material_libraries = material_libraries.into_inner();
     let mut warnings = Vec::new();
     let materials = match materials {
         Ok(m) => m,
@@ -219,7 +226,12 @@ pub fn load_obj(path: &Path, transform: &MeshTransform) -> Result<LoadedObj, Obj
             (colour, tris)
         })
         .collect();
-    Ok(LoadedObj { vertices: Arc::new(MeshVertices { positions, normals, uvs }), groups, warnings })
+    Ok(LoadedObj {
+        vertices: Arc::new(MeshVertices { positions, normals, uvs }),
+        groups,
+        warnings,
+        material_libraries,
+    })
 }
 
 /// The first `mtllib` line: its number and the library's name.

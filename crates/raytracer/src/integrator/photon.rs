@@ -202,6 +202,21 @@ pub struct PhotonStats {
     pub map_bytes: u64,
 }
 
+impl PhotonStats {
+    /// The statistics of two photon maps together.
+    pub fn add(&self, other: &PhotonStats) -> PhotonStats {
+        PhotonStats {
+            requested: self.requested + other.requested,
+            emitted: self.emitted + other.emitted,
+            stored: self.stored + other.stored,
+            rays: self.rays + other.rays,
+            trace_time: self.trace_time + other.trace_time,
+            build_time: self.build_time + other.build_time,
+            map_bytes: self.map_bytes.max(other.map_bytes),
+        }
+    }
+}
+
 /// Bytes of memory a photon map of `max_photons` photons may need.
 pub fn map_bytes(max_photons: u64) -> u64 {
     max_photons.saturating_mul(BYTES_PER_PHOTON)

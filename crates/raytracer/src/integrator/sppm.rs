@@ -32,7 +32,7 @@
 //! whatever the count; the statistics of a pass sum over its batches. Everything is
 //! deterministic: pixels and photons draw from their own streams, photons are stored in index
 //! order, and every pixel sums its photons in the map's fixed order, so the image does not depend
-//! on the thread count, and any rectangle of pixels renders to the same values on its own.
+//! on the thread count, and any set of rows renders to the same values on its own.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -46,7 +46,7 @@ use crate::integrator::lights::Lights;
 use crate::integrator::path::{Vertex, walk};
 use crate::integrator::photon_map::{MapEntry, PhotonMap};
 use crate::prepare::PreparedScene;
-use crate::render::PixelRect;
+use crate::render::Rows;
 use crate::sampler::{PixelRng, stream};
 use crate::scene::{Diagnostic, PhotonSettings, Severity};
 
@@ -186,8 +186,22 @@ pub struct SppmStats {
     pub mean_radius: f64,
 }
 
+impl SppmStats {
+    /// The statistics of two runs together (the mean radius is their mean).
+    pub fn add(&self, other: &SppmStats) -> SppmStats {
+        SppmStats {
+            passes: self.passes + other.passes,
+            photons: self.photons + other.photons,
+            stored: self.stored + other.stored,
+            rays: self.rays + other.rays,
+            photon_seconds: self.photon_seconds + other.photon_seconds,
+            mean_radius: (self.mean_radius + other.mean_radius) / 2.0,
+        }
+    }
+}
+
 /// The state of one pixel across passes.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 struct PixelState {
     /// Sum over passes of the light the camera paths gathered directly.
     direct: DVec3,
@@ -218,37 +232,107 @@ struct VisiblePoint {
     m: u64,
 }
 
-/// Renders the pixels `rect` (row-major result) of an image `image_width` pixels wide, seen
-/// through `camera`, with SPPM. `progress(passes)` is called after each pass.
+/// The state of an SPPM render of some rows between two passes: all it needs to go on, so that
+/// a render resumed from it ([`render_from`]) gives the very values of one that never stopped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SppmState {
+    /// Passes finished.
+    pub passes_done: u64,
+    /// Each pixel's state, in the order of [`Rows::ys`].
+    pixels: Vec<PixelState>,
+    /// What the finished passes did (rays, photons; `mean_radius` is set at the end).
+    pub stats: SppmStats,
+}
+
+impl SppmState {
+    /// Values a pixel holds in [`SppmState::values`].
+    pub const VALUES_PER_PIXEL: usize = 8;
+
+    /// The state before the first pass of a render of `pixels` pixels.
+    pub fn new(pixels: usize) -> SppmState {
+        SppmState { passes_done: 0, pixels: vec![PixelState::default(); pixels], stats: SppmStats::default() }
+    }
+
+    /// The pixels' state as [`Self::VALUES_PER_PIXEL`] numbers a pixel (to be saved exactly).
+    pub fn values(&self) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.pixels.len() * Self::VALUES_PER_PIXEL);
+        for p in &self.pixels {
+            out.extend_from_slice(&[
+                p.direct.x, p.direct.y, p.direct.z, p.tau.x, p.tau.y, p.tau.z, p.n, p.r2,
+            ]);
+        }
+        out
+    }
+
+    /// The state [`Self::values`] saved, after `passes_done` passes that did `stats`.
+    pub fn from_values(passes_done: u64, values: &[f64], stats: SppmStats) -> SppmState {
+        let pixels = values
+            .chunks_exact(Self::VALUES_PER_PIXEL)
+            .map(|v| PixelState {
+                direct: DVec3::new(v[0], v[1], v[2]),
+                tau: DVec3::new(v[3], v[4], v[5]),
+                n: v[6],
+                r2: v[7],
+            })
+            .collect();
+        SppmState { passes_done, pixels, stats }
+    }
+
+    /// The number of pixels.
+    pub fn pixels(&self) -> usize {
+        self.pixels.len()
+    }
+}
+
+/// Renders the pixels of `rows` (in the order of [`Rows::ys`]), seen through `camera`, with SPPM.
+/// `progress(passes)` is called after each pass.
 pub fn render(
     scene: &PreparedScene,
     camera: &Camera,
     settings: &SppmSettings,
-    image_width: u32,
-    rect: PixelRect,
+    rows: &Rows,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Vec<DVec3>, SppmStats) {
+    render_from(scene, camera, settings, rows, SppmState::new(rows.len()), &mut |_| {}, progress)
+}
+
+/// [`render`] from `state` (the state after some passes of the same render, or
+/// [`SppmState::new`]), calling `after_pass` with the state after each pass.
+///
+/// # Panics
+/// If `state` is not a state of `rows.len()` pixels.
+pub fn render_from(
+    scene: &PreparedScene,
+    camera: &Camera,
+    settings: &SppmSettings,
+    rows: &Rows,
+    state: SppmState,
+    after_pass: &mut dyn FnMut(&SppmState),
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<DVec3>, SppmStats) {
     let lights = Lights::new(scene);
-    let w = rect.x1.saturating_sub(rect.x0) as usize;
-    let pixels = rect.len();
+    let image_width = rows.width();
+    let w = image_width as usize;
+    let ys: Vec<u32> = rows.ys().collect();
+    let pixels = rows.len();
+    assert_eq!(state.pixels.len(), pixels, "an SPPM state of another set of rows");
     if pixels == 0 {
         return (Vec::new(), SppmStats::default());
     }
-    let mut states = vec![PixelState::default(); pixels];
+    let SppmState { passes_done, pixels: mut states, mut stats } = state;
     let mut points = vec![VisiblePoint::default(); pixels];
-    let rays = AtomicU64::new(0);
-    let mut stats = SppmStats::default();
+    let rays = AtomicU64::new(stats.rays);
     let cam = &scene.scene.camera;
     let pixel_angle = cam.lens_width / image_width as f64;
-    let mut photon_seconds = 0.0;
-    for pass in 0..settings.passes {
+    let mut photon_seconds = stats.photon_seconds;
+    for pass in passes_done..settings.passes {
         // 1. Camera pass.
         points.par_chunks_mut(w).zip(states.par_chunks_mut(w)).enumerate().for_each(
             |(row, (points, states))| {
-                let y = rect.y0 + row as u32;
+                let y = ys[row];
                 let mut row_rays = 0;
                 for (i, (vp, state)) in points.iter_mut().zip(states.iter_mut()).enumerate() {
-                    let x = rect.x0 + i as u32;
+                    let x = i as u32;
                     let mut rng = PixelRng::for_sample(settings.seed, stream::SPPM_CAMERA, x, y, pass);
                     let (dx, dy) = (rng.uniform(), rng.uniform());
                     let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
@@ -358,6 +442,13 @@ pub fn render(
         });
         stats.passes += 1;
         progress(pass + 1);
+        if pass + 1 < settings.passes {
+            let stats = SppmStats { rays: rays.load(Ordering::Relaxed), photon_seconds, ..stats };
+            // The pixel states move into the saved state and back: no copy.
+            let saved = SppmState { passes_done: pass + 1, pixels: std::mem::take(&mut states), stats };
+            after_pass(&saved);
+            states = saved.pixels;
+        }
     }
 
     let passes = settings.passes.max(1) as f64;

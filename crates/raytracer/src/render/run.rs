@@ -1,0 +1,215 @@
+//! One run of a model over some rows ([`super::RenderSettings::runs`]): the classic, photon and
+//! path models in chunks of rows that a checkpoint keeps, SPPM from a saved state. Every random
+//! number is keyed by the run's seed ([`run_seed`]), the pixel or photon, and the sample or pass,
+//! so a run's values do not depend on how its rows are grouped or when it was interrupted.
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use rayon::prelude::*;
+
+use super::adaptive::AdaptiveSampler;
+use super::checkpoint::{self, Checkpoint, Estimate};
+use super::{Progress, RenderError, RenderSettings, RenderStats, Rows, Stage, camera_for};
+use crate::integrator::path::PathTracer;
+use crate::integrator::photon::{self, PhotonEstimate};
+use crate::integrator::sppm::{self, SppmSettings, SppmState};
+use crate::integrator::{Classic, Model};
+use crate::prepare::PreparedScene;
+use crate::sampler::{ExactSum, PixelRng, hash_values, stream};
+
+/// The seed of run `run`: the render's seed for the first run (so that a render of one run is the
+/// render as it always was), one derived from it and the run for the others.
+pub fn run_seed(seed: u64, run: u32) -> u64 {
+    if run == 0 { seed } else { hash_values(&[seed, stream::RUN, run as u64]) }
+}
+
+/// Run `run` of the classic, photon or path model over `rows`: in one go, or with a checkpoint in
+/// [`checkpoint::CHUNKS`] chunks of rows, each saved as it finishes and taken from the checkpoint
+/// when an earlier render saved it.
+pub(super) fn render_rows_run(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    rows: &Rows,
+    run: u32,
+    progress: &(dyn Fn(Progress) + Sync),
+    mut checkpoint: Option<&mut Checkpoint>,
+) -> Result<(Estimate, RenderStats), RenderError> {
+    let seed = run_seed(settings.seed, run);
+    let chunks = match checkpoint {
+        Some(_) => checkpoint::chunk_rows(rows),
+        None => vec![rows.clone()],
+    };
+    let chunked = chunks.len() > 1;
+    // A chunk's progress is reported as chunks done, not as its own stages.
+    let chunk_progress = |p: Progress| {
+        if !chunked || matches!(p.stage, Stage::TracingPhotons | Stage::BuildingPhotonMap) {
+            progress(p);
+        }
+    };
+    let photon_settings = settings.photon_settings(scene);
+    // The photon map, built when the first chunk that needs it is rendered.
+    let mut photon_map = None;
+    let mut stats = RenderStats::default();
+    let mut estimates = Vec::with_capacity(chunks.len());
+    for (i, chunk) in chunks.iter().enumerate() {
+        let saved = checkpoint.as_deref().and_then(|c| c.chunk(run, i as u32));
+        let estimate = match saved {
+            Some(estimate) => estimate.clone(),
+            None => {
+                let (estimate, chunk_stats) = match settings.model {
+                    Model::Path => {
+                        // Runs of the path tracer are ranges of sample indices: `--spp` samples each.
+                        let spp = settings.path_spp() as u64;
+                        let samples = run as u64 * spp..(run as u64 + 1) * spp;
+                        let total = chunk.len() as u64 * spp;
+                        let report = |done| chunk_progress(Progress { stage: Stage::Sampling, done, total });
+                        report(0);
+                        let (sums, rays) = path_sums(scene, settings, chunk, samples, &report);
+                        (
+                            Estimate::Sums(sums, spp),
+                            RenderStats { rays, camera_samples: total, ..RenderStats::default() },
+                        )
+                    }
+                    Model::Photon => {
+                        let (map, photon_stats) = photon_map.get_or_insert_with(|| {
+                            let report = |done, total| {
+                                chunk_progress(Progress { stage: Stage::TracingPhotons, done, total })
+                            };
+                            let built = photon::build_photon_map(scene, &photon_settings, seed, &report);
+                            chunk_progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
+                            built
+                        });
+                        let integrator =
+                            Classic::with_photons(scene, PhotonEstimate::new(map, &photon_settings));
+                        let (colors, mut chunk_stats) =
+                            AdaptiveSampler::new(scene, integrator, settings, seed)
+                                .run(chunk, &chunk_progress);
+                        // The map's making counts once, with its first chunk.
+                        if stats.photons.is_none() {
+                            chunk_stats.photons = Some(*photon_stats);
+                        }
+                        (Estimate::Colors(colors), chunk_stats)
+                    }
+                    Model::Classic => {
+                        let (colors, chunk_stats) =
+                            AdaptiveSampler::new(scene, Classic::new(scene), settings, seed)
+                                .run(chunk, &chunk_progress);
+                        (Estimate::Colors(colors), chunk_stats)
+                    }
+                    Model::Sppm => unreachable!("SPPM runs are rendered by render_sppm_run"),
+                };
+                stats.add(&chunk_stats);
+                if let Some(c) = checkpoint.as_deref_mut() {
+                    c.save_chunk(run, i as u32, estimate.clone()).map_err(RenderError::Checkpoint)?;
+                }
+                estimate
+            }
+        };
+        if chunked {
+            progress(Progress { stage: Stage::Chunks, done: i as u64 + 1, total: chunks.len() as u64 });
+        }
+        estimates.push(estimate);
+    }
+    Ok((concatenate(estimates), stats))
+}
+
+/// The estimates of consecutive chunks of rows as one.
+fn concatenate(estimates: Vec<Estimate>) -> Estimate {
+    let mut estimates = estimates.into_iter();
+    let Some(mut all) = estimates.next() else {
+        return Estimate::Colors(Vec::new());
+    };
+    for next in estimates {
+        match (&mut all, next) {
+            (Estimate::Colors(all), Estimate::Colors(more)) => all.extend(more),
+            (Estimate::Sums(all, _), Estimate::Sums(more, _)) => all.extend(more),
+            _ => unreachable!("the chunks of a run are estimated alike"),
+        }
+    }
+    all
+}
+
+/// Run `run` of SPPM over `rows`, from the state a checkpoint saved if there is one, saving its
+/// state there after passes.
+pub(super) fn render_sppm_run(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    rows: &Rows,
+    run: u32,
+    progress: &(dyn Fn(Progress) + Sync),
+    mut checkpoint: Option<&mut Checkpoint>,
+) -> Result<(Estimate, RenderStats), RenderError> {
+    let sppm_settings = SppmSettings { seed: run_seed(settings.seed, run), ..settings.sppm_settings(scene) };
+    let camera = camera_for(scene, settings);
+    let total = sppm_settings.passes;
+    let start = checkpoint
+        .as_deref()
+        .and_then(|c| c.sppm_state(run))
+        .cloned()
+        .unwrap_or_else(|| SppmState::new(rows.len()));
+    progress(Progress { stage: Stage::Passes, done: start.passes_done, total });
+    let report = |done| progress(Progress { stage: Stage::Passes, done, total });
+    let mut failure = None;
+    let mut after_pass = |state: &SppmState| {
+        if let Some(c) = checkpoint.as_deref_mut()
+            && failure.is_none()
+        {
+            failure = c.save_sppm(run, state).err();
+        }
+    };
+    let (colors, sppm_stats) =
+        sppm::render_from(scene, &camera, &sppm_settings, rows, start, &mut after_pass, &report);
+    if let Some(error) = failure {
+        return Err(RenderError::Checkpoint(error));
+    }
+    let stats = RenderStats {
+        rays: sppm_stats.rays,
+        camera_samples: rows.len() as u64 * sppm_stats.passes,
+        sppm: Some(sppm_stats),
+        ..RenderStats::default()
+    };
+    Ok((Estimate::Colors(colors), stats))
+}
+
+/// The exact sums of the path tracer's samples `samples` (sample indices) of every pixel of
+/// `rows` (in the order of [`Rows::ys`]), and the rays traced. Sample `s` of pixel `(x, y)` draws
+/// from its own stream (seed, pixel, `s`), so sums of disjoint sample ranges and rows merge
+/// ([`ExactSum::merge`]) into exactly the sums of one render. `progress(done)` reports samples
+/// finished (pixels times samples) from worker threads.
+pub fn path_sums(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    rows: &Rows,
+    samples: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Vec<ExactSum>, u64) {
+    let camera = camera_for(scene, settings);
+    let tracer = PathTracer::new(scene, settings.max_depth);
+    let width = rows.width() as usize;
+    let ys: Vec<u32> = rows.ys().collect();
+    let mut sums = vec![ExactSum::default(); rows.len()];
+    let rays = AtomicU64::new(0);
+    let done = AtomicU64::new(0);
+    let per_row = width as u64 * (samples.end.saturating_sub(samples.start));
+    if width > 0 {
+        sums.par_chunks_mut(width).enumerate().for_each(|(row, sums)| {
+            let y = ys[row];
+            let mut row_rays = 0;
+            for (x, sum) in sums.iter_mut().enumerate() {
+                let x = x as u32;
+                for s in samples.clone() {
+                    let mut rng = PixelRng::for_sample(settings.seed, stream::PATH, x, y, s);
+                    let (dx, dy) = (rng.uniform(), rng.uniform());
+                    let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
+                    let result = tracer.radiance(camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
+                    sum.add(result.radiance);
+                    row_rays += result.rays;
+                }
+            }
+            rays.fetch_add(row_rays, Ordering::Relaxed);
+            progress(done.fetch_add(per_row, Ordering::Relaxed) + per_row);
+        });
+    }
+    (sums, rays.load(Ordering::Relaxed))
+}
