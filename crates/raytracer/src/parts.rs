@@ -26,20 +26,21 @@
 
 use std::collections::BTreeMap;
 use std::fmt;
-use std::io::BufReader;
+use std::io::{BufReader, Read, Seek};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image as ExrImage, ImageAttributes,
-    IntegerBounds, Layer, LayerAttributes, ReadChannels, ReadLayers, Text, Vec2, WritableImage,
+    IntegerBounds, Layer, LayerAttributes, ReadChannels, ReadLayers, SampleType, Text, Vec2, WritableImage,
 };
 use sha2::{Digest, Sha256};
 
+use crate::MemoryBudget;
 use crate::image_io::Image;
 use crate::render::{PortionPixels, Rows};
 use crate::sampler::ExactSum;
-use crate::scene::MAX_IMAGE_SIDE;
+use crate::scene::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
 
 /// The most rows in one block of a tile.
 pub const MAX_TILE_BLOCK_ROWS: u32 = 16;
@@ -249,14 +250,12 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), PartWriteError> {
             let mut channels: smallvec::SmallVec<[AnyChannel<FlatSamples>; 4]> =
                 smallvec::smallvec![channel("R", 0), channel("G", 1), channel("B", 2)];
             if let Some(sums) = sums {
-                for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                for c in 0..3 {
                     for word in 0..4 {
                         let values =
                             sums.iter().map(|s| (s.fixed[c] as u128 >> (32 * word)) as u32).collect();
-                        channels.push(AnyChannel::new(
-                            format!("sum.{name}.{word}").as_str(),
-                            FlatSamples::U32(values),
-                        ));
+                        channels
+                            .push(AnyChannel::new(sum_channel(c, word).as_str(), FlatSamples::U32(values)));
                     }
                 }
             }
@@ -273,6 +272,23 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), PartWriteError> {
         .collect();
     let image = ExrImage::from_layers(attributes, layers);
     atomic_file::write_atomically(path, |out| image.write().to_buffered(out))
+}
+
+/// The name of the channel of word `word` (0: the lowest 32 bits) of the sums of colour channel
+/// `c` (0, 1, 2: R, G, B): `sum.R.0` .. `sum.B.3`.
+fn sum_channel(c: usize, word: usize) -> String {
+    format!("sum.{}.{word}", ["R", "G", "B"][c])
+}
+
+/// The channels every block of a part holds: `R`, `G`, `B` as 32-bit floats, then for a pass
+/// the words of its sums as 32-bit integers, colour by colour, lowest word first.
+fn part_channels(is_pass: bool) -> Vec<(String, SampleType)> {
+    let mut channels: Vec<(String, SampleType)> =
+        ["R", "G", "B"].iter().map(|c| (c.to_string(), SampleType::F32)).collect();
+    if is_pass {
+        channels.extend((0..12).map(|i| (sum_channel(i / 4, i % 4), SampleType::U32)));
+    }
+    channels
 }
 
 /// The text of an attribute, with anything but printable ASCII replaced (EXR text is bytes).
@@ -306,15 +322,29 @@ pub enum PartError {
     Mismatch(String),
 }
 
-/// Reads a part file written by [`write_part`].
+/// Reads a part file written by [`write_part`], its pixels within the default memory budget
+/// ([`MemoryBudget::default`]).
 pub fn read_part(path: &Path) -> Result<Part, PartError> {
-    let not_a_part = |reason: String| PartError::NotAPart { path: path.to_path_buf(), reason };
     let file = std::fs::File::open(path)
         .map_err(|e| PartError::Read { path: path.to_path_buf(), reason: e.to_string() })?;
-    // The headers first, so that a file claiming absurd sizes is refused before any pixel is
-    // allocated.
-    let meta = exr::meta::MetaData::read_from_buffered(BufReader::new(&file), false)
-        .map_err(|e| PartError::Read { path: path.to_path_buf(), reason: e.to_string() })?;
+    read_part_from(BufReader::new(file), path, &MemoryBudget::default())
+}
+
+/// Reads a part file from `input` (a file or bytes in memory; buffered, as it is read in small
+/// pieces), named `path` in errors. The headers come first: a file whose size, blocks of rows or
+/// channels are not those of a part is refused, and the bytes its pixels take once decoded are
+/// charged to `budget` (and stay charged: the part holds them), all before any pixel is
+/// allocated.
+pub fn read_part_from(
+    input: impl Read + Seek,
+    path: &Path,
+    budget: &MemoryBudget,
+) -> Result<Part, PartError> {
+    let not_a_part = |reason: String| PartError::NotAPart { path: path.to_path_buf(), reason };
+    let cannot_read =
+        |e: exr::error::Error| PartError::Read { path: path.to_path_buf(), reason: e.to_string() };
+    let chunks = exr::block::read(input, false).map_err(cannot_read)?;
+    let meta = chunks.meta_data();
     let first = meta.headers.first().ok_or_else(|| not_a_part("it holds no image".into()))?;
     let attr = |name: &str| -> Result<String, PartError> {
         // Written among the image's attributes; a reader may file them under the layer's.
@@ -329,6 +359,7 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
     if display.position != Vec2(0, 0)
         || !(1..=MAX_IMAGE_SIDE as usize).contains(&width)
         || !(1..=MAX_IMAGE_SIDE as usize).contains(&height)
+        || (width * height) as u64 > MAX_IMAGE_PIXELS
     {
         return Err(not_a_part(format!(
             "its display window ({width}x{height}) is not an image rayterra renders"
@@ -347,51 +378,69 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
             .map_err(|_| not_a_part(format!("`{ATTR_SAMPLES}` is not a count")))?,
     };
     let expected = tile_rows(header.height, header.tile).map_err(not_a_part)?;
-    let layout: Vec<Range<u32>> = meta
+    // In 64 bits: a layer's position and size are the file's word.
+    let layout: Vec<Range<u64>> = meta
         .headers
         .iter()
         .map(|h| {
-            let start = h.own_attributes.layer_position.1.max(0) as u32;
-            start..start + h.layer_size.1 as u32
+            let start = h.own_attributes.layer_position.1.max(0) as u64;
+            start..start + h.layer_size.1 as u64
         })
         .collect();
     let full_width =
         meta.headers.iter().all(|h| h.own_attributes.layer_position.0 == 0 && h.layer_size.0 == width);
-    if layout != expected || !full_width {
+    if !layout.iter().cloned().eq(expected.iter().map(|r| r.start as u64..r.end as u64)) || !full_width {
         return Err(not_a_part(format!("its blocks of rows are not those of tile {}", header.tile)));
     }
+    let is_pass = header.pass.count > 1;
+    let channels = part_channels(is_pass);
+    for h in &meta.headers {
+        for (name, sample_type) in &channels {
+            if !h
+                .channels
+                .list
+                .iter()
+                .any(|c| c.name == Text::from(name.as_str()) && c.sample_type == *sample_type)
+            {
+                let kind = if *sample_type == SampleType::F32 { "32-bit float" } else { "32-bit integer" };
+                return Err(not_a_part(format!("a block has no {kind} `{name}` channel")));
+            }
+        }
+    }
+    let pixel_bytes: u64 =
+        meta.headers.iter().map(|h| h.channels.bytes_per_pixel as u64 * h.layer_size.area() as u64).sum();
+    budget.charge(pixel_bytes).map_err(|e| not_a_part(format!("its pixels {e}")))?;
 
+    // One thread: a part is decoded about as fast as it is read, and a thread pool for each
+    // file would cost more than it saves.
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .all_layers()
         .all_attributes()
-        .from_file(path)
-        .map_err(|e| PartError::Read { path: path.to_path_buf(), reason: e.to_string() })?;
-    let is_pass = header.pass.count > 1;
+        .non_parallel()
+        .from_chunks(chunks)
+        .map_err(cannot_read)?;
     let mut blocks = Vec::with_capacity(image.layer_data.len());
     for (layer, rows) in image.layer_data.iter().zip(expected) {
         let find = |name: &str| layer.channel_data.list.iter().find(|c| c.name == *name);
+        let missing = |name: &str| not_a_part(format!("a block has no `{name}` channel"));
         let float = |name: &str| match find(name).map(|c| &c.sample_data) {
             Some(FlatSamples::F32(v)) => Ok(v),
-            _ => Err(not_a_part(format!("a block has no 32-bit float `{name}` channel"))),
+            _ => Err(missing(name)),
         };
         let (r, g, b) = (float("R")?, float("G")?, float("B")?);
         let pixels: Vec<[f32; 3]> = r.iter().zip(g).zip(b).map(|((&r, &g), &b)| [r, g, b]).collect();
         let sums = if is_pass {
             let mut sums = vec![ExactSum::default(); pixels.len()];
-            for (c, name) in ["R", "G", "B"].iter().enumerate() {
-                for word in 0..4 {
-                    let name = format!("sum.{name}.{word}");
-                    let Some(FlatSamples::U32(values)) = find(&name).map(|c| &c.sample_data) else {
-                        return Err(not_a_part(format!(
-                            "a block of a pass has no 32-bit integer `{name}` channel"
-                        )));
-                    };
-                    for (sum, &v) in sums.iter_mut().zip(values) {
-                        sum.fixed[c] = (sum.fixed[c] as u128 | (v as u128) << (32 * word)) as i128;
-                    }
+            for (i, (name, _)) in channels.iter().enumerate().skip(3) {
+                let Some(FlatSamples::U32(values)) = find(name).map(|c| &c.sample_data) else {
+                    return Err(missing(name));
+                };
+                let (c, word) = ((i - 3) / 4, (i - 3) % 4);
+                for (sum, &v) in sums.iter_mut().zip(values) {
+                    sum.fixed[c] = (sum.fixed[c] as u128 | (v as u128) << (32 * word)) as i128;
                 }
             }
             Some(sums)
