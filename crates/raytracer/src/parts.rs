@@ -26,10 +26,13 @@
 
 use std::collections::BTreeMap;
 use std::fmt;
-use std::io::{BufReader, Read, Seek};
+use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
+use exr::block::chunk::CompressedBlock;
+use exr::meta::BlockDescription;
+use exr::meta::attribute::LevelMode;
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image as ExrImage, ImageAttributes,
     IntegerBounds, Layer, LayerAttributes, ReadChannels, ReadLayers, SampleType, Text, Vec2, WritableImage,
@@ -322,11 +325,22 @@ pub enum PartError {
     Mismatch(String),
 }
 
+impl PartError {
+    /// The file at `path` could not be read or decoded, for `reason`.
+    fn read(path: &Path, reason: impl fmt::Display) -> PartError {
+        PartError::Read { path: path.to_path_buf(), reason: reason.to_string() }
+    }
+
+    /// The file at `path` is not a part file, for `reason`.
+    fn not_a_part(path: &Path, reason: impl Into<String>) -> PartError {
+        PartError::NotAPart { path: path.to_path_buf(), reason: reason.into() }
+    }
+}
+
 /// Reads a part file written by [`write_part`], its pixels within the default memory budget
 /// ([`MemoryBudget::default`]).
 pub fn read_part(path: &Path) -> Result<Part, PartError> {
-    let file = std::fs::File::open(path)
-        .map_err(|e| PartError::Read { path: path.to_path_buf(), reason: e.to_string() })?;
+    let file = std::fs::File::open(path).map_err(|e| PartError::read(path, e))?;
     read_part_from(BufReader::new(file), path, &MemoryBudget::default())
 }
 
@@ -336,14 +350,14 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
 /// charged to `budget` (and stay charged: the part holds them), all before any pixel is
 /// allocated.
 pub fn read_part_from(
-    input: impl Read + Seek,
+    mut input: impl Read + Seek,
     path: &Path,
     budget: &MemoryBudget,
 ) -> Result<Part, PartError> {
-    let not_a_part = |reason: String| PartError::NotAPart { path: path.to_path_buf(), reason };
-    let cannot_read =
-        |e: exr::error::Error| PartError::Read { path: path.to_path_buf(), reason: e.to_string() };
-    let chunks = exr::block::read(input, false).map_err(cannot_read)?;
+    let not_a_part = |reason: String| PartError::not_a_part(path, reason);
+    let cannot_read = |e: exr::error::Error| PartError::read(path, e);
+    let start = input.stream_position().map_err(|e| cannot_read(e.into()))?;
+    let chunks = exr::block::read(&mut input, false).map_err(cannot_read)?;
     let meta = chunks.meta_data();
     let first = meta.headers.first().ok_or_else(|| not_a_part("it holds no image".into()))?;
     let attr = |name: &str| -> Result<String, PartError> {
@@ -392,16 +406,21 @@ pub fn read_part_from(
     if !layout.iter().cloned().eq(expected.iter().map(|r| r.start as u64..r.end as u64)) || !full_width {
         return Err(not_a_part(format!("its blocks of rows are not those of tile {}", header.tile)));
     }
+    // One resolution level of flat samples, as written: `exr` reads other levels' blocks of
+    // adversarial files into the wrong level (a failed assertion).
+    let one_level = |h: &exr::meta::header::Header| match h.blocks {
+        BlockDescription::ScanLines => true,
+        BlockDescription::Tiles(t) => t.level_mode == LevelMode::Singular,
+    };
+    if let Some(h) = meta.headers.iter().find(|h| h.deep || !one_level(h)) {
+        let what = if h.deep { "deep samples" } else { "several resolution levels" };
+        return Err(not_a_part(format!("a block has {what}")));
+    }
     let is_pass = header.pass.count > 1;
     let channels = part_channels(is_pass);
     for h in &meta.headers {
         for (name, sample_type) in &channels {
-            if !h
-                .channels
-                .list
-                .iter()
-                .any(|c| c.name == Text::from(name.as_str()) && c.sample_type == *sample_type)
-            {
+            if !h.channels.list.iter().any(|c| c.name == *name.as_str() && c.sample_type == *sample_type) {
                 let kind = if *sample_type == SampleType::F32 { "32-bit float" } else { "32-bit integer" };
                 return Err(not_a_part(format!("a block has no {kind} `{name}` channel")));
             }
@@ -409,8 +428,50 @@ pub fn read_part_from(
     }
     let pixel_bytes: u64 =
         meta.headers.iter().map(|h| h.channels.bytes_per_pixel as u64 * h.layer_size.area() as u64).sum();
-    budget.charge(pixel_bytes).map_err(|e| not_a_part(format!("its pixels {e}")))?;
+    budget.charge(pixel_bytes).map_err(|e| not_a_part(format!("decoding its pixels {e}")))?;
+    let blocks = check_blocks(chunks, path)
+        .and_then(|()| {
+            input.seek(SeekFrom::Start(start)).map_err(|e| cannot_read(e.into()))?;
+            let chunks = exr::block::read(&mut input, false).map_err(cannot_read)?;
+            decode_blocks(chunks, path, expected, &channels)
+        })
+        .inspect_err(|_| budget.release(pixel_bytes))?;
+    Ok(Part { header, blocks })
+}
 
+/// Reads the blocks of pixels the offset tables of `chunks` point to (without decoding them) and
+/// checks that each is of the first resolution level, as [`write_part`] writes them: `exr` reads
+/// a block that claims another level into the wrong one (a failed assertion), whatever the
+/// headers say.
+fn check_blocks(chunks: exr::block::reader::Reader<impl Read + Seek>, path: &Path) -> Result<(), PartError> {
+    let not_a_part = |reason: &str| PartError::not_a_part(path, reason);
+    let cannot_read = |e: exr::error::Error| PartError::read(path, e);
+    for chunk in chunks.filter_chunks(false, |_, _, _| true).map_err(cannot_read)? {
+        match chunk.map_err(cannot_read)?.compressed_block {
+            CompressedBlock::ScanLine(_) => {}
+            CompressedBlock::Tile(tile) if tile.coordinates.level_index == Vec2(0, 0) => {}
+            CompressedBlock::Tile(_) => {
+                return Err(not_a_part("a block of pixels is of a smaller resolution level"));
+            }
+            CompressedBlock::DeepScanLine(_) | CompressedBlock::DeepTile(_) => {
+                return Err(not_a_part("a block of pixels has deep samples"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Decodes the pixels of a part whose headers and blocks were checked: its blocks of rows
+/// `rows`, which hold `channels` ([`part_channels`]).
+fn decode_blocks(
+    chunks: exr::block::reader::Reader<impl Read + Seek>,
+    path: &Path,
+    rows: Vec<Range<u32>>,
+    channels: &[(String, SampleType)],
+) -> Result<Vec<Block>, PartError> {
+    let not_a_part = |reason: String| PartError::not_a_part(path, reason);
+    let cannot_read = |e: exr::error::Error| PartError::read(path, e);
+    let is_pass = channels.len() > 3;
     // One thread: a part is decoded about as fast as it is read, and a thread pool for each
     // file would cost more than it saves.
     let image = exr::prelude::read()
@@ -423,7 +484,7 @@ pub fn read_part_from(
         .from_chunks(chunks)
         .map_err(cannot_read)?;
     let mut blocks = Vec::with_capacity(image.layer_data.len());
-    for (layer, rows) in image.layer_data.iter().zip(expected) {
+    for (layer, rows) in image.layer_data.iter().zip(rows) {
         let find = |name: &str| layer.channel_data.list.iter().find(|c| c.name == *name);
         let missing = |name: &str| not_a_part(format!("a block has no `{name}` channel"));
         let float = |name: &str| match find(name).map(|c| &c.sample_data) {
@@ -449,7 +510,7 @@ pub fn read_part_from(
         };
         blocks.push(Block { rows, pixels, sums });
     }
-    Ok(Part { header, blocks })
+    Ok(blocks)
 }
 
 /// Assembles part files into the full image: every tile of every pass must be there once, and all
@@ -683,6 +744,25 @@ mod tests {
             err.contains("`part-0.exr` and `part-1.exr` are parts of different renders: their settings"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn pixels_over_the_memory_budget_are_refused_before_decoding() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("part.exr");
+        let rows = Rows::tile(3, 20, Split::WHOLE).expect("tile");
+        let pixels = PortionPixels::Final(vec![[0.5; 3]; rows.len()]);
+        write_part(&Part::from_portion(header(Split::WHOLE, Split::WHOLE), &rows, pixels), &path)
+            .expect("written");
+        let open = || BufReader::new(std::fs::File::open(&path).expect("open"));
+        // 60 pixels of three 32-bit floats.
+        let budget = MemoryBudget::new(719);
+        let err = read_part_from(open(), &path, &budget).expect_err("over budget").to_string();
+        assert!(err.contains("decoding its pixels needs 720 bytes") && err.contains("memory limit"), "{err}");
+        assert_eq!(budget.used(), 0);
+        let budget = MemoryBudget::new(720);
+        read_part_from(open(), &path, &budget).expect("within budget");
+        assert_eq!(budget.used(), 720, "the part holds its pixels");
     }
 
     #[test]

@@ -493,6 +493,20 @@ mod tests {
     }
 
     #[test]
+    fn material_libraries_that_are_not_regular_files_are_not_read() {
+        // A device that never ends would be read forever.
+        let obj = b"mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+        let m = parse_obj(obj, "m.obj", Path::new("."), &MeshTransform::default()).expect("loads");
+        assert_eq!(m.warnings.len(), 1, "{:?}", m.warnings);
+        assert!(
+            m.warnings[0]
+                .contains("m.obj:1: cannot read the material library `/dev/zero` (it is not a regular file)"),
+            "{:?}",
+            m.warnings
+        );
+    }
+
+    #[test]
     fn polylines_are_left_out() {
         // `tobj` would make a polygon of the second, with a texture index before any `vt`.
         let m = load("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n  l -1/-3 -2 3//3\nf 1 2 3\n").expect("loads");
