@@ -150,21 +150,23 @@ fn tiny(scene: &PreparedScene, model: Model, width: u32, height: u32) -> RenderS
     }
 }
 
-/// The seeds of `part_file`: tile 1 of 2 of a classic render, and pass 1 of 2 of a path-traced
-/// one, of 4 x 12 pixels.
+/// The seeds of `part_file`: tile 1 of 2 of a classic render of 2 x 96 pixels, and pass 1 of 2
+/// of a path-traced one of 2 x 48 pixels. Both are cut into blocks of 8 rows, high enough for
+/// blocks of [`raytracer::parts::tile_block_rows`]'s largest share rather than its least.
 fn part_seeds(scene: &PreparedScene) -> Vec<(&'static str, Part)> {
     [
-        ("classic-tile-1-of-2.exr", Model::Classic, Split { index: 1, count: 2 }, Split::WHOLE, 0..2),
-        ("path-pass-1-of-2.exr", Model::Path, Split::WHOLE, Split { index: 1, count: 2 }, 1..2),
+        ("classic-tile-1-of-2.exr", Model::Classic, 96, Split { index: 1, count: 2 }, Split::WHOLE, 0..2),
+        ("path-pass-1-of-2.exr", Model::Path, 48, Split::WHOLE, Split { index: 1, count: 2 }, 1..2),
     ]
     .into_iter()
-    .map(|(name, model, tile, pass, runs)| {
-        let settings = tiny(scene, model, 4, 12);
-        let rows = Rows::tile(4, 12, tile).expect("tile");
+    .map(|(name, model, height, tile, pass, runs)| {
+        assert_eq!(raytracer::parts::tile_block_rows(height, tile.count), 8);
+        let settings = tiny(scene, model, 2, height);
+        let rows = Rows::tile(2, height, tile).expect("tile");
         let portion = render_portion(scene, &settings, &rows, runs, &|_| {}).expect("renders");
         let header = PartHeader {
-            width: 4,
-            height: 12,
+            width: 2,
+            height,
             scene: "caustics".into(),
             settings: format!("{model:?}"),
             tile,
