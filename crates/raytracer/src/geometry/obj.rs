@@ -19,6 +19,8 @@ use crate::scene::Location;
 
 /// Largest OBJ file read, in bytes (2 GiB: about 40 million triangles).
 pub const MAX_OBJ_BYTES: u64 = 2 << 30;
+/// Largest material library (`.mtl`) read, in bytes.
+pub const MAX_MTL_BYTES: u64 = 64 << 20;
 /// Most triangles one mesh file may hold after fanning polygons (the indices of 2^28 triangles
 /// take 3 GiB).
 pub const MAX_TRIANGLES: usize = 1 << 28;
@@ -101,32 +103,48 @@ pub struct ObjError {
     pub message: String,
 }
 
-/// Reads the OBJ file at `path` and moves its vertices by `transform`.
+/// Reads the OBJ file at `path` and moves its vertices by `transform` ([`parse_obj`] on the
+/// file's bytes, its material libraries read beside it).
 pub fn load_obj(path: &Path, transform: &MeshTransform) -> Result<LoadedObj, ObjError> {
     let file = path.display().to_string();
-    let fail = |line: Option<u32>, message: String| ObjError { file: file.clone(), line, message };
-    let size = std::fs::metadata(path).map_err(|e| fail(None, format!("cannot read it: {e}")))?.len();
+    let fail = |message: String| ObjError { file: file.clone(), line: None, message };
+    let size = std::fs::metadata(path).map_err(|e| fail(format!("cannot read it: {e}")))?.len();
     if size > MAX_OBJ_BYTES {
-        return Err(fail(
-            None,
-            format!("it is {size} bytes; meshes of at most {MAX_OBJ_BYTES} bytes are read"),
-        ));
+        return Err(fail(format!("it is {size} bytes; meshes of at most {MAX_OBJ_BYTES} bytes are read")));
     }
-    let bytes = std::fs::read(path).map_err(|e| fail(None, format!("cannot read it: {e}")))?;
-    // Only ASCII matters outside comments (which may be GBK, as in the course's files).
-    let text = match String::from_utf8(bytes) {
-        Ok(t) => t,
-        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-    };
-    check_faces(&text).map_err(|(line, message)| fail(Some(line), message))?;
+    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read it: {e}")))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse_obj(&bytes, &file, &dir, transform)
+}
+
+/// Reads the bytes of an OBJ file, named `file` in messages, whose material libraries (`mtllib`)
+/// are read from the folder `dir` (at most [`MAX_MTL_BYTES`] each, regular files only), and
+/// moves its vertices by `transform`.
+pub fn parse_obj(
+    bytes: &[u8],
+    file: &str,
+    dir: &Path,
+    transform: &MeshTransform,
+) -> Result<LoadedObj, ObjError> {
+    let fail = |line: Option<u32>, message: String| ObjError { file: file.to_owned(), line, message };
+    // Only ASCII matters outside comments (which may be GBK, as in the course's files).
+    let text = String::from_utf8_lossy(bytes);
+    check_faces(&text).map_err(|(line, message)| fail(Some(line), message))?;
+    let text = without_polylines(&text);
     let mut reader = LineReader { data: text.as_bytes(), pos: 0 };
     let options =
         tobj::LoadOptions { triangulate: true, single_index: false, ignore_points: true, ignore_lines: true };
     let material_libraries = std::cell::RefCell::new(Vec::new());
+    // Why the last material library could not be read, in our words rather than `tobj`'s.
+    let library_problem = std::cell::RefCell::new(None);
     let (models, materials) = tobj::load_obj_buf(&mut reader, &options, |p| {
-        material_libraries.borrow_mut().push(dir.join(p));
-        tobj::load_mtl(dir.join(p))
+        let path = dir.join(p);
+        material_libraries.borrow_mut().push(path.clone());
+        let bytes = read_material_library(&path).map_err(|problem| {
+            *library_problem.borrow_mut() = Some(problem);
+            tobj::LoadError::OpenFileFailed
+        })?;
+        tobj::load_mtl_buf(&mut bytes.as_slice())
     })
     .map_err(|e| fail(Some(reader.line()), format!("{e}")))?;
     let material_libraries = material_libraries.into_inner();
@@ -135,8 +153,9 @@ pub fn load_obj(path: &Path, transform: &MeshTransform) -> Result<LoadedObj, Obj
         Ok(m) => m,
         Err(e) => {
             if let Some((line, lib)) = first_mtllib(&text) {
+                let why = library_problem.into_inner().unwrap_or_else(|| e.to_string());
                 warnings.push(format!(
-                    "{file}:{line}: cannot read the material library `{lib}` ({e}); the scene's material is used"
+                    "{file}:{line}: cannot read the material library `{lib}` ({why}); the scene's material is used"
                 ));
             }
             Vec::new()
@@ -234,12 +253,51 @@ pub fn load_obj(path: &Path, transform: &MeshTransform) -> Result<LoadedObj, Obj
     })
 }
 
+/// The bytes of the material library at `path`, if it is a regular file of at most
+/// [`MAX_MTL_BYTES`] (not a device or a pipe that never ends); otherwise why not.
+fn read_material_library(path: &Path) -> Result<Vec<u8>, String> {
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let meta = file.metadata().map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("it is not a regular file".into());
+    }
+    let mut bytes = Vec::new();
+    // A file may grow, or say it is empty (as those in /proc do): the bound is on what is read.
+    file.take(MAX_MTL_BYTES + 1).read_to_end(&mut bytes).map_err(|e| e.to_string())?;
+    if bytes.len() as u64 > MAX_MTL_BYTES {
+        return Err(format!("it is over {MAX_MTL_BYTES} bytes"));
+    }
+    Ok(bytes)
+}
+
 /// The first `mtllib` line: its number and the library's name.
 fn first_mtllib(text: &str) -> Option<(u32, String)> {
     text.lines().enumerate().find_map(|(i, l)| {
         let rest = l.trim_start().strip_prefix("mtllib")?;
         Some((i as u32 + 1, rest.trim().to_owned()))
     })
+}
+
+/// The text with every polyline (`l`) made a comment, byte for byte in place (so lines keep
+/// their numbers): a polyline has no surface to hit, and `tobj` would read one of three or more
+/// vertices as a polygon, its indices unchecked.
+fn without_polylines(text: &str) -> std::borrow::Cow<'_, str> {
+    let is_polyline = |line: &str| line.split_whitespace().next() == Some("l");
+    if !text.lines().any(is_polyline) {
+        return text.into();
+    }
+    let mut out = String::with_capacity(text.len());
+    for line in text.split_inclusive('\n') {
+        if is_polyline(line) {
+            let indent = line.len() - line.trim_start().len();
+            out.push_str(&line[..indent]);
+            out.push('#');
+            out.push_str(&line[indent + 1..]);
+        } else {
+            out.push_str(line);
+        }
+    }
+    out.into()
 }
 
 /// Checks every `f` line: at least three vertices, and every index (`i`, `i/j`, `i//k`, `i/j/k`,
@@ -432,6 +490,28 @@ mod tests {
         // x rotation leaves x; z rotation takes x to y; scale 3.
         let p = t.point(DVec3::X);
         assert!((p - DVec3::new(10.0, 3.0, 0.0)).length() < 1e-12, "{p}");
+    }
+
+    #[test]
+    fn material_libraries_that_are_not_regular_files_are_not_read() {
+        // A device that never ends would be read forever.
+        let obj = b"mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+        let m = parse_obj(obj, "m.obj", Path::new("."), &MeshTransform::default()).expect("loads");
+        assert_eq!(m.warnings.len(), 1, "{:?}", m.warnings);
+        assert!(
+            m.warnings[0]
+                .contains("m.obj:1: cannot read the material library `/dev/zero` (it is not a regular file)"),
+            "{:?}",
+            m.warnings
+        );
+    }
+
+    #[test]
+    fn polylines_are_left_out() {
+        // `tobj` would make a polygon of the second, with a texture index before any `vt`.
+        let m = load("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n  l -1/-3 -2 3//3\nf 1 2 3\n").expect("loads");
+        assert_eq!(m.triangle_count(), 1);
+        assert!(m.vertices.uvs.is_empty());
     }
 
     #[test]

@@ -129,7 +129,9 @@ impl Checkpoint {
             Err(e) if e.kind() == io::ErrorKind::NotFound => {}
             Err(e) => return Err(io_error(path, e)),
         }
-        checkpoint.resumed = (checkpoint.chunks.len(), checkpoint.sppm.values().map(|s| s.passes_done).sum());
+        // Saturating: the counts are the file's word, and only shown.
+        let passes = checkpoint.sppm.values().fold(0u64, |total, s| total.saturating_add(s.passes_done));
+        checkpoint.resumed = (checkpoint.chunks.len(), passes);
         // Written again whole: a new file gets its header, an old one loses a cut record.
         checkpoint.rewrite()?;
         Ok(checkpoint)
