@@ -197,11 +197,12 @@ fn checkpoint_seeds(scene: &PreparedScene) -> Vec<(String, Vec<u8>, (usize, u64)
         let bytes = std::fs::read(&path).expect("read");
         let resumed = Checkpoint::open(&path, CHECKPOINT_KEY, &rows).expect("reopens").resumed();
         if model == Model::Classic {
-            // The header, the first record and half the second. Each record is one row's chunk
-            // of one run: its head (17 bytes), three f64 colours of 3 pixels and a checksum.
-            assert_eq!(resumed, (10, 0), "2 runs of 5 chunks");
-            let record = 17 + 3 * 24 + 8;
-            let header = bytes.len() - 10 * record;
+            // The header, the first record and half the second. Each record is one run's chunk
+            // of all 5 rows (a chunk has at least 16 rows): its head (17 bytes), three f64
+            // colours of 15 pixels and a checksum.
+            assert_eq!(resumed, (2, 0), "2 runs of 1 chunk");
+            let record = 17 + 15 * 24 + 8;
+            let header = bytes.len() - 2 * record;
             let cut = bytes[..header + record + record / 2].to_vec();
             seeds.push((format!("{name}-cut.ckpt"), cut, (1, 0)));
         }
