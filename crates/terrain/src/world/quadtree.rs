@@ -362,11 +362,7 @@ fn exact_error(
                 let fz = (r - r0) as f32 / (r1 - r0) as f32;
                 for c in c0..=c1 {
                     let fx = (c - c0) as f32 / (c1 - c0) as f32;
-                    let coarse = if fx + fz <= 1.0 {
-                        h00 + (h01 - h00) * fx + (h10 - h00) * fz
-                    } else {
-                        h11 + (h10 - h11) * (1.0 - fx) + (h01 - h11) * (1.0 - fz)
-                    };
+                    let coarse = coarse_surface([h00, h10, h01, h11], fx, fz);
                     worst = worst.max((coarse.max(0.0) - height(r, c).max(0.0)).abs());
                 }
             }
@@ -417,18 +413,24 @@ fn patch_deviation(
                     let (r, c) = (clamp_r(r0 + fr).min(r1), clamp_c(c0 + fc).min(c1));
                     let fz = (r - r0) as f32 / (r1 - r0) as f32;
                     let fx = (c - c0) as f32 / (c1 - c0) as f32;
-                    // (a, b, c) = (h00, h10, h01) below the diagonal, (c, b, d) above.
-                    let coarse = if fx + fz <= 1.0 {
-                        h00 + (h01 - h00) * fx + (h10 - h00) * fz
-                    } else {
-                        h11 + (h10 - h11) * (1.0 - fx) + (h01 - h11) * (1.0 - fz)
-                    };
+                    let coarse = coarse_surface([h00, h10, h01, h11], fx, fz);
                     worst = worst.max((coarse - height(r, c)).abs());
                 }
             }
         }
     }
     worst
+}
+
+/// The height of a coarse cell's surface with corners `[h00, h10, h01, h11]` at the fractions
+/// `fx` (along columns) and `fz` (along rows): triangles (h00, h10, h01) below the diagonal and
+/// (h01, h10, h11) above it, split as the mesh splits them.
+fn coarse_surface([h00, h10, h01, h11]: [f32; 4], fx: f32, fz: f32) -> f32 {
+    if fx + fz <= 1.0 {
+        h00 + (h01 - h00) * fx + (h10 - h00) * fz
+    } else {
+        h11 + (h10 - h11) * (1.0 - fx) + (h01 - h11) * (1.0 - fz)
+    }
 }
 
 #[cfg(test)]
