@@ -1,13 +1,19 @@
 //! Rendering off-screen: one frame into a texture, read back as an image. No window or display
 //! is needed, so this runs on servers and in tests (on a software GPU such as Mesa's lavapipe).
 
+#[cfg(not(target_arch = "wasm32"))]
 use std::sync::mpsc;
 
 use image::RgbaImage;
 
+#[cfg(not(target_arch = "wasm32"))]
 use crate::config::SceneConfig;
-use crate::render::{FrameView, Gpu, GpuError, RenderError, Renderer, TEXTURE_FORMAT};
+#[cfg(not(target_arch = "wasm32"))]
+use crate::render::{FrameView, Renderer, TEXTURE_FORMAT};
+use crate::render::{Gpu, GpuError, RenderError};
+#[cfg(not(target_arch = "wasm32"))]
 use crate::settings::Settings;
+#[cfg(not(target_arch = "wasm32"))]
 use crate::world::World;
 
 /// Checks that `width` x `height` can be rendered on `gpu`: both sides between 1 and the GPU's
@@ -82,8 +88,29 @@ impl OffscreenTarget {
     }
 
     /// Copies the target's pixels back to the CPU, as RGBA, after all submitted work.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn read(&self, gpu: &Gpu) -> Result<RgbaImage, RenderError> {
-        let (width, height) = self.size;
+        let (sender, receiver) = mpsc::channel();
+        self.request_read(gpu, move |result| {
+            let _ = sender.send(result);
+        });
+        gpu.finish()?;
+        receiver
+            .recv()
+            .map_err(|error| GpuError::Readback(error.to_string()))?
+            .map_err(|error| GpuError::Readback(error.to_string()))?;
+        self.mapped_image()
+    }
+
+    /// Copies the target's pixels into the read-back buffer after all submitted work, and asks
+    /// for it to be mapped: `mapped` is called when it is (then [`Self::mapped_image`]). What a
+    /// page does, which cannot wait for the GPU.
+    pub fn request_read(
+        &self,
+        gpu: &Gpu,
+        mapped: impl FnOnce(Result<(), wgpu::BufferAsyncError>) + wgpu::WasmNotSend + 'static,
+    ) {
+        let height = self.size.1;
         let mut encoder =
             gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
         encoder.copy_texture_to_buffer(
@@ -99,15 +126,12 @@ impl OffscreenTarget {
             self.texture.size(),
         );
         gpu.queue.submit([encoder.finish()]);
-        let (sender, receiver) = mpsc::channel();
-        self.readback.map_async(wgpu::MapMode::Read, .., move |result| {
-            let _ = sender.send(result);
-        });
-        gpu.finish()?;
-        receiver
-            .recv()
-            .map_err(|error| GpuError::Readback(error.to_string()))?
-            .map_err(|error| GpuError::Readback(error.to_string()))?;
+        self.readback.map_async(wgpu::MapMode::Read, .., mapped);
+    }
+
+    /// The pixels of the mapped read-back buffer, as RGBA; unmaps it.
+    pub fn mapped_image(&self) -> Result<RgbaImage, RenderError> {
+        let (width, height) = self.size;
         let mut pixels = Vec::new();
         pixels.try_reserve_exact(4 * width as usize * height as usize).map_err(|_| {
             GpuError::OutOfMemory {
@@ -136,13 +160,16 @@ impl OffscreenTarget {
     }
 }
 
-/// A renderer drawing into an off-screen target of a fixed size.
+/// A renderer drawing into an off-screen target of a fixed size (it waits for the GPU: not in
+/// a browser).
+#[cfg(not(target_arch = "wasm32"))]
 #[derive(Debug)]
 pub struct HeadlessRenderer {
     renderer: Renderer,
     target: OffscreenTarget,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 impl HeadlessRenderer {
     /// Uploads `world` (laid out with `config`) for the look of `settings` and creates a
     /// `width` x `height` target.
@@ -189,6 +216,7 @@ impl HeadlessRenderer {
 
 /// Renders one frame of `world` off-screen on `gpu` with `settings`: the whole headless path in
 /// one call.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn render_image(
     gpu: &Gpu,
     world: &World,

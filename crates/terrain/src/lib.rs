@@ -10,6 +10,12 @@
 //! - [`headless`]: one frame off-screen, read back as an image.
 //! - [`window`]: the interactive window (winit), using the same renderer.
 //! - [`panel`]: the window's tuning panel (egui, F1).
+//! - [`overlay`]: egui drawn over a frame (the panel's host in the window and in a web page).
+//!
+//! The crate also builds for `wasm32-unknown-unknown` (the web page, `web/`): there the GPU is
+//! opened with [`render::Gpu::open_async`], the window ([`window`]) and the blocking
+//! functions are left out, and off-screen images are read back without waiting
+//! ([`headless::OffscreenTarget::request_read`]).
 //!
 //! The library never prints, exits or parses command lines: it returns values and typed errors.
 
@@ -18,9 +24,11 @@ pub mod config;
 pub mod controls;
 pub mod headless;
 pub mod output;
+pub mod overlay;
 pub mod panel;
 pub mod render;
 pub mod settings;
+#[cfg(not(target_arch = "wasm32"))]
 pub mod window;
 pub mod world;
 

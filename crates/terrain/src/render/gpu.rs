@@ -156,35 +156,51 @@ impl Gpu {
     }
 
     /// Opens a device for drawing off-screen on `backend`.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn headless(backend: Backend) -> Result<Self, GpuError> {
         Self::open(Self::instance(backend, None), backend, None)
     }
 
     /// Opens a device from `instance` on `backend`, able to present to `surface` if given.
     /// The device gets the adapter's full limits, so large heightmaps fit where the GPU allows.
+    /// Blocks until the device is open (in a browser, use [`Gpu::open_async`]).
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn open(
         instance: wgpu::Instance,
         backend: Backend,
         surface: Option<&wgpu::Surface<'_>>,
     ) -> Result<Self, GpuError> {
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            compatible_surface: surface,
-            apply_limit_buckets: false,
-        }))
-        .map_err(|error| GpuError::NoAdapter { backend, reason: error.to_string() })?;
+        pollster::block_on(Self::open_async(instance, backend, surface))
+    }
+
+    /// [`Gpu::open`] without blocking: what a web page awaits (a browser cannot block).
+    pub async fn open_async(
+        instance: wgpu::Instance,
+        backend: Backend,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, GpuError> {
+        let adapter = instance
+            .request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: surface,
+                apply_limit_buckets: false,
+            })
+            .await
+            .map_err(|error| GpuError::NoAdapter { backend, reason: error.to_string() })?;
         // Wireframe where the GPU can draw lines (the tuning panel's switch).
         let optional = wgpu::Features::POLYGON_MODE_LINE;
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("rayterra terrain"),
-            required_features: adapter.features() & optional,
-            required_limits: adapter.limits(),
-            experimental_features: wgpu::ExperimentalFeatures::disabled(),
-            memory_hints: wgpu::MemoryHints::Performance,
-            trace: wgpu::Trace::Off,
-        }))
-        .map_err(|source| GpuError::Device { adapter: describe(&adapter.get_info()), source })?;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("rayterra terrain"),
+                required_features: adapter.features() & optional,
+                required_limits: adapter.limits(),
+                experimental_features: wgpu::ExperimentalFeatures::disabled(),
+                memory_hints: wgpu::MemoryHints::Performance,
+                trace: wgpu::Trace::Off,
+            })
+            .await
+            .map_err(|source| GpuError::Device { adapter: describe(&adapter.get_info()), source })?;
         let errors = Arc::new(Mutex::new(Vec::new()));
         let sink = Arc::clone(&errors);
         device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
@@ -227,6 +243,7 @@ impl Gpu {
     /// Runs `make` (creating and filling GPU resources for the `what`) inside error scopes, so
     /// that running out of memory, or anything the device refuses, becomes an error naming
     /// `what` instead of an invalid resource that fails (or panics) when it is first used.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn scoped<T>(&self, what: &str, make: impl FnOnce() -> T) -> Result<T, GpuError> {
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
@@ -240,11 +257,27 @@ impl Gpu {
             (Some(error), _, _) => {
                 Err(GpuError::OutOfMemory { what: what.to_string(), message: error.to_string() })
             }
-            (None, Some(error), _) | (None, None, Some(error)) => {
-                Err(GpuError::Reported { messages: vec![format!("making the {what}: {error}")] })
-            }
+            (None, Some(error), _) | (None, None, Some(error)) => Err(scope_error(what, &error)),
             (None, None, None) => Ok(made),
         }
+    }
+
+    /// In a browser the scopes' answers come later (a page cannot wait for them): what they
+    /// report, naming `what`, joins the errors [`Gpu::check`] returns after the next frames.
+    #[cfg(target_arch = "wasm32")]
+    pub fn scoped<T>(&self, what: &str, make: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let made = make();
+        let (what, sink) = (what.to_string(), Arc::clone(&self.errors));
+        let answer = scope.pop();
+        wasm_bindgen_futures::spawn_local(async move {
+            if let Some(error) = answer.await
+                && let Ok(mut list) = sink.lock()
+            {
+                list.push(scope_error(&what, &error).to_string());
+            }
+        });
+        Ok(made)
     }
 
     /// Checks that `bytes` more for the `what` fit in the memory at hand. A software adapter
@@ -268,10 +301,16 @@ impl Gpu {
     }
 
     /// Blocks until the GPU has finished all submitted work, then reports its errors.
+    #[cfg(not(target_arch = "wasm32"))]
     pub fn finish(&self) -> Result<(), GpuError> {
         self.device.poll(wgpu::PollType::wait_indefinitely())?;
         self.check()
     }
+}
+
+/// An error a scope caught while making the `what`.
+fn scope_error(what: &str, error: &wgpu::Error) -> GpuError {
+    GpuError::Reported { messages: vec![format!("making the {what}: {error}")] }
 }
 
 fn megabytes(bytes: u64) -> String {

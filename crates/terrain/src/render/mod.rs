@@ -18,6 +18,7 @@ mod reflection;
 mod sea;
 mod shadow;
 mod sky;
+mod surface;
 mod texture;
 mod uniforms;
 mod water;
@@ -26,6 +27,7 @@ pub use course::MESH_MAX_SIDE;
 pub use frame::{FrameStats, FrameView};
 pub use gpu::{Backend, Gpu, GpuError};
 pub use lighting::SHADOW_MAP_SIZE;
+pub use surface::{Acquired, PresentSurface};
 pub use texture::TEXTURE_FORMAT;
 
 use course::CourseLook;

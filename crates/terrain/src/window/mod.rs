@@ -5,8 +5,6 @@
 //! wheel zooms. While the panel is open the mouse is free for it, and Tab moves between its
 //! widgets.
 
-mod gui;
-
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -23,8 +21,11 @@ use crate::config::SceneConfig;
 use crate::controls::{self, Action};
 use crate::headless::OffscreenTarget;
 use crate::output::{SaveError, save_image};
+use crate::overlay::Overlay;
 use crate::panel::{Panel, PanelRequests};
-use crate::render::{Backend, FrameView, Gpu, GpuError, GpuMemory, RenderError, Renderer};
+use crate::render::{
+    Acquired, Backend, FrameView, Gpu, GpuError, GpuMemory, PresentSurface, RenderError, Renderer,
+};
 use crate::settings::{Settings, ViewSettings};
 use crate::world::World;
 use crate::world::heightfield::height_under;
@@ -188,11 +189,10 @@ pub fn run(
 /// What exists once the window is open.
 struct Running {
     window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    surface_config: wgpu::SurfaceConfiguration,
+    surface: PresentSurface,
     gpu: Gpu,
     renderer: Renderer,
-    gui: gui::Gui,
+    gui: Overlay,
 }
 
 struct App<'a> {
@@ -241,38 +241,18 @@ impl App<'_> {
             .map_err(|error| WindowError::Surface(error.to_string()))?;
         let gpu = Gpu::open(instance, self.options.backend, Some(&surface))?;
         (self.notice)(Notice::Adapter(gpu.describe()));
-        let capabilities = surface.get_capabilities(&gpu.adapter);
-        // Draw into a non-sRGB view, like the off-screen path and the course's OpenGL: the
-        // textures' stored values go to the screen as they are.
-        let format = capabilities
-            .formats
-            .iter()
-            .copied()
-            .find(|format| !format.is_srgb())
-            .or(capabilities.formats.first().copied())
-            .ok_or_else(|| {
-                WindowError::Surface(format!("{} cannot present to this window", gpu.describe()))
-            })?;
-        let view_format = format.remove_srgb_suffix();
         let present_mode =
             if self.options.vsync { wgpu::PresentMode::AutoVsync } else { wgpu::PresentMode::AutoNoVsync };
         let size = window.inner_size();
-        let surface_config = wgpu::SurfaceConfiguration {
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            format,
-            color_space: wgpu::SurfaceColorSpace::default(),
-            width: size.width.max(1),
-            height: size.height.max(1),
-            present_mode,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: capabilities.alpha_modes.first().copied().unwrap_or(wgpu::CompositeAlphaMode::Auto),
-            view_formats: if view_format == format { Vec::new() } else { vec![view_format] },
-        };
-        surface.configure(&gpu.device, &surface_config);
+        let surface = PresentSurface::new(&gpu, surface, (size.width, size.height), present_mode)
+            .ok_or_else(|| {
+                WindowError::Surface(format!("{} cannot present to this window", gpu.describe()))
+            })?;
+        let view_format = surface.view_format();
         let renderer = Renderer::new(&gpu, self.world, self.config, &self.settings, view_format)?;
         (self.notice)(Notice::GpuMemory { memory: renderer.gpu_memory(), tree_bytes: renderer.cpu_bytes() });
-        let gui = gui::Gui::new(&window, &gpu, view_format);
-        Ok(Running { window, surface, surface_config, gpu, renderer, gui })
+        let gui = Overlay::new(&window, &gpu, view_format);
+        Ok(Running { window, surface, gpu, renderer, gui })
     }
 
     /// Turns mouse look on (`captured`) or off. Grabbing and hiding the cursor is best effort:
@@ -400,7 +380,7 @@ impl App<'_> {
         let Some(running) = &mut self.running else {
             return;
         };
-        let size = (running.surface_config.width, running.surface_config.height);
+        let size = running.surface.size();
         let result = (|| -> Result<PathBuf, String> {
             let target = OffscreenTarget::new(&running.gpu, running.renderer.target_format(), size.0, size.1)
                 .map_err(|error| error.to_string())?;
@@ -437,28 +417,16 @@ impl App<'_> {
         let Some(running) = &mut self.running else {
             return;
         };
-        let frame = match running.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(frame) | wgpu::CurrentSurfaceTexture::Suboptimal(frame) => {
-                frame
-            }
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => return,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                running.surface.configure(&running.gpu.device, &running.surface_config);
-                return;
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                let error = running.gpu.check().err().unwrap_or_else(|| GpuError::Reported {
-                    messages: vec!["the window's surface could not be acquired".into()],
-                });
+        let frame = match running.surface.acquire(&running.gpu) {
+            Ok(Acquired::Frame(frame)) => frame,
+            Ok(Acquired::Skip) => return,
+            Err(error) => {
                 self.fail(event_loop, error.into());
                 return;
             }
         };
-        let target = frame.texture.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(running.renderer.target_format()),
-            ..Default::default()
-        });
-        let size = (running.surface_config.width, running.surface_config.height);
+        let target = running.surface.view(&frame);
+        let size = running.surface.size();
         running.renderer.draw(&running.gpu, &target, size, &view);
         let mut requests = PanelRequests::default();
         if self.panel_open {
@@ -536,22 +504,7 @@ impl ApplicationHandler for App<'_> {
         if self.panel_open
             && let Some(running) = &mut self.running
         {
-            let used = running.gui.on_window_event(&running.window, &event);
-            let for_panel = match &event {
-                WindowEvent::KeyboardInput { event: key, .. } => {
-                    // F1 (the panel), F12 (a screenshot) and Esc are always the window's.
-                    use winit::keyboard::KeyCode;
-                    let ours = matches!(
-                        key.physical_key,
-                        PhysicalKey::Code(KeyCode::F1 | KeyCode::F12 | KeyCode::Escape)
-                    );
-                    !ours && (used || running.gui.wants_keyboard())
-                }
-                WindowEvent::MouseInput { .. } | WindowEvent::MouseWheel { .. } => {
-                    used || running.gui.wants_pointer()
-                }
-                _ => false,
-            };
+            let for_panel = running.gui.takes(&running.window, &event);
             if for_panel {
                 return;
             }
@@ -559,13 +512,8 @@ impl ApplicationHandler for App<'_> {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
-                if let Some(running) = &mut self.running
-                    && size.width > 0
-                    && size.height > 0
-                {
-                    running.surface_config.width = size.width;
-                    running.surface_config.height = size.height;
-                    running.surface.configure(&running.gpu.device, &running.surface_config);
+                if let Some(running) = &mut self.running {
+                    running.surface.resize(&running.gpu, (size.width, size.height));
                 }
             }
             WindowEvent::Focused(false) => {

@@ -74,6 +74,15 @@ enum Samples {
     Sixteen(Vec<u16>),
 }
 
+/// A heightmap's samples as stored (see [`Heightmap::samples`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StoredSamples<'a> {
+    /// Grey levels as numbers.
+    Levels(&'a [f32]),
+    /// 16-bit values: `level = value / 257`.
+    Sixteen(&'a [u16]),
+}
+
 /// The grey level of a 16-bit value: `value / 257` (so 8-bit grey `g`, stored as `257 g`, is `g`).
 pub fn level_of_sixteen(value: u16) -> f32 {
     f32::from(value) / 257.0
@@ -182,6 +191,15 @@ impl Heightmap {
         }
     }
 
+    /// The samples as stored, row by row from the top row: what [`Heightmap::new`] or
+    /// [`Heightmap::from_sixteen_bit`] rebuild the same heightmap from.
+    pub fn samples(&self) -> StoredSamples<'_> {
+        match &self.samples {
+            Samples::Levels(levels) => StoredSamples::Levels(levels),
+            Samples::Sixteen(values) => StoredSamples::Sixteen(values),
+        }
+    }
+
     /// All grey levels, row by row from the top row.
     pub fn levels(&self) -> LevelIter<'_> {
         match &self.samples {
@@ -254,6 +272,16 @@ impl ExactSizeIterator for LevelIter<'_> {}
 mod tests {
     use super::*;
     use image::{GrayImage, ImageBuffer, Luma, Rgb, RgbImage};
+
+    #[test]
+    fn stored_samples_rebuild_the_same_heightmap() {
+        let levels = Heightmap::new(2, 2, vec![0.5, 1.0, 254.25, 3.0]).expect("valid");
+        let StoredSamples::Levels(stored) = levels.samples() else { panic!("levels stay numbers") };
+        assert_eq!(Heightmap::new(2, 2, stored.to_vec()).expect("valid"), levels);
+        let sixteen = Heightmap::from_sixteen_bit(3, 2, vec![0, 1, 257, 1000, 65535, 7]).expect("valid");
+        let StoredSamples::Sixteen(stored) = sixteen.samples() else { panic!("16-bit stays 16-bit") };
+        assert_eq!(stored, &[0, 1, 257, 1000, 65535, 7]);
+    }
 
     #[test]
     fn eight_bit_levels_are_whole() {

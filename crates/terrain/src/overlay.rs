@@ -1,4 +1,4 @@
-//! The window's overlay: egui (its context, its winit input state and its wgpu renderer), drawn
+//! An overlay for the window and the web page: egui (its context, its winit input state and its wgpu renderer), drawn
 //! over the frame. Its last shapes are kept, so a screenshot shows what the window shows.
 
 use std::sync::Arc;
@@ -13,8 +13,8 @@ struct Painted {
     screen: egui_wgpu::ScreenDescriptor,
 }
 
-/// egui in the window.
-pub(super) struct Gui {
+/// egui over the frames of a window (native or a web page's canvas).
+pub struct Overlay {
     ctx: egui::Context,
     state: egui_winit::State,
     renderer: egui_wgpu::Renderer,
@@ -24,9 +24,9 @@ pub(super) struct Gui {
     freed: Vec<egui::TextureId>,
 }
 
-impl Gui {
+impl Overlay {
     /// egui for `window`, drawing into targets of `format`.
-    pub(super) fn new(window: &Arc<Window>, gpu: &Gpu, format: wgpu::TextureFormat) -> Self {
+    pub fn new(window: &Arc<Window>, gpu: &Gpu, format: wgpu::TextureFormat) -> Self {
         let ctx = egui::Context::default();
         let max_side = gpu.device.limits().max_texture_dimension_2d as usize;
         let state = egui_winit::State::new(
@@ -42,22 +42,42 @@ impl Gui {
     }
 
     /// Passes a window event to egui; whether egui used it (then the scene should not).
-    pub(super) fn on_window_event(&mut self, window: &Window, event: &winit::event::WindowEvent) -> bool {
+    pub fn on_window_event(&mut self, window: &Window, event: &winit::event::WindowEvent) -> bool {
         self.state.on_window_event(window, event).consumed
     }
 
+    /// Passes a window event to egui while the panel is open; whether the event is the
+    /// panel's (then the scene should not see it): typing, clicks and scrolls on the panel.
+    /// F1 (the panel), F12 (a screenshot) and Esc are always the scene's.
+    pub fn takes(&mut self, window: &Window, event: &winit::event::WindowEvent) -> bool {
+        use winit::event::WindowEvent;
+        use winit::keyboard::{KeyCode, PhysicalKey};
+        let used = self.on_window_event(window, event);
+        match event {
+            WindowEvent::KeyboardInput { event: key, .. } => {
+                let ours = matches!(
+                    key.physical_key,
+                    PhysicalKey::Code(KeyCode::F1 | KeyCode::F12 | KeyCode::Escape)
+                );
+                !ours && (used || self.wants_keyboard())
+            }
+            WindowEvent::MouseInput { .. } | WindowEvent::MouseWheel { .. } => used || self.wants_pointer(),
+            _ => false,
+        }
+    }
+
     /// Whether the pointer is over the panel (a click there is not for the scene).
-    pub(super) fn wants_pointer(&self) -> bool {
+    pub fn wants_pointer(&self) -> bool {
         self.ctx.egui_wants_pointer_input() || self.ctx.is_pointer_over_egui()
     }
 
     /// Whether a text field has the keyboard (keys are not for the camera).
-    pub(super) fn wants_keyboard(&self) -> bool {
+    pub fn wants_keyboard(&self) -> bool {
         self.ctx.egui_wants_keyboard_input()
     }
 
     /// Runs the interface for one frame and keeps its shapes for [`Self::paint`].
-    pub(super) fn run(&mut self, window: &Window, size: (u32, u32), ui: impl FnMut(&egui::Context)) {
+    pub fn run(&mut self, window: &Window, size: (u32, u32), ui: impl FnMut(&egui::Context)) {
         let input = self.state.take_egui_input(window);
         let mut ui = ui;
         let mut output = self.ctx.run_pass(input, |ctx| ui(ctx));
@@ -76,7 +96,7 @@ impl Gui {
     }
 
     /// Draws the last frame's shapes over `target` (of `size` pixels), if it has any.
-    pub(super) fn paint(&mut self, gpu: &Gpu, target: &wgpu::TextureView, size: (u32, u32)) {
+    pub fn paint(&mut self, gpu: &Gpu, target: &wgpu::TextureView, size: (u32, u32)) {
         for (id, delta) in self.pending_textures.drain(..) {
             self.renderer.update_texture(&gpu.device, &gpu.queue, id, &delta);
         }
@@ -114,7 +134,7 @@ impl Gui {
     }
 
     /// Forgets the last frame's shapes (the panel was closed).
-    pub(super) fn clear(&mut self) {
+    pub fn clear(&mut self) {
         self.last = None;
     }
 }

@@ -1,0 +1,116 @@
+// Drives headless Chromium (Debian's /usr/bin/chromium, through its DevTools protocol) against
+// the page served at --url, once with WebGPU, once with WebGL2 only, and once with neither, and
+// writes what it saw into --out for tests/browser.rs to check: the page's reported state, the
+// frames read back from the engine, a compositor screenshot, and the messages shown.
+//
+// node browser.mjs --url http://127.0.0.1:PORT --out DIR --corrupt FILE
+import { writeFileSync } from 'node:fs';
+import { join } from 'node:path';
+import puppeteer from 'puppeteer-core';
+
+const arg = (name) => {
+  const at = process.argv.indexOf(`--${name}`);
+  if (at < 0 || at + 1 >= process.argv.length) throw new Error(`missing --${name}`);
+  return process.argv[at + 1];
+};
+const [url, out, corrupt] = [arg('url'), arg('out'), arg('corrupt')];
+
+// Quiet, offline, as root in a container.
+const common = ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
+  '--disable-component-update', '--disable-sync', '--window-size=800,600'];
+const modes = {
+  // SwiftShader's WebGPU adapter (the machine has no GPU), composited through Vulkan: with
+  // ANGLE on its GL SwiftShader instead, a WebGPU canvas is never shown and buffers can no
+  // longer be mapped once it has drawn ("A valid external Instance reference no longer exists").
+  webgpu: ['--enable-unsafe-webgpu', '--use-webgpu-adapter=swiftshader', '--enable-features=Vulkan',
+    '--use-vulkan=swiftshader', '--use-angle=vulkan'],
+  // No WebGPU adapter: the page must fall back to WebGL2 by itself.
+  webgl: ['--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+  // Neither API: the page must say so.
+  none: ['--disable-webgl', '--disable-3d-apis', '--disable-features=WebGPU,Vulkan'],
+};
+const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+async function waitFor(page, what, test, seconds) {
+  const until = Date.now() + seconds * 1000;
+  for (;;) {
+    const value = await page.evaluate(test);
+    if (value) return value;
+    if (Date.now() > until) throw new Error(`timed out after ${seconds} s waiting for ${what}`);
+    await sleep(200);
+  }
+}
+
+const state = (page) => page.evaluate(() => window.rayterra.state());
+const errorShown = () => {
+  const box = document.getElementById('error');
+  return box && !box.hidden && box.textContent;
+};
+
+async function captureTo(page, name) {
+  const frame = await page.evaluate(async () => {
+    const { width, height, data } = await window.rayterra.capture();
+    let text = '';
+    for (let i = 0; i < data.length; i += 0x8000) text += String.fromCharCode(...data.subarray(i, i + 0x8000));
+    return { width, height, data: btoa(text) };
+  });
+  writeFileSync(join(out, `${name}.rgba`), Buffer.from(frame.data, 'base64'));
+  return { width: frame.width, height: frame.height };
+}
+
+async function run(mode) {
+  const browser = await puppeteer.launch({
+    executablePath: '/usr/bin/chromium',
+    headless: true,
+    args: [...common, ...modes[mode]],
+    userDataDir: join(out, `profile-${mode}`),
+  });
+  const report = { mode, console: [], pageErrors: [] };
+  try {
+    const page = await browser.newPage();
+    await page.setViewport({ width: 800, height: 600 });
+    page.on('console', (message) => report.console.push(`${message.type()}: ${message.text()}`));
+    page.on('pageerror', (error) => report.pageErrors.push(error.message));
+    await page.goto(`${url}/?size=640x360&paused&time=3`);
+    if (mode === 'none') {
+      report.error = await waitFor(page, 'the page to say it cannot draw', errorShown, 60);
+      return report;
+    }
+    await waitFor(page, 'frames of the world', () => {
+      const s = window.rayterra?.state?.();
+      return s && (s.error || s.frames >= 3);
+    }, 180);
+    report.before = await state(page);
+    if (report.before.error) return report;
+    report.frame = await captureTo(page, `${mode}-frame`);
+    const canvas = await page.$('#terrain');
+    await canvas.screenshot({ path: join(out, `${mode}-screenshot.png`) });
+    // Hold W: the camera flies forward (toward -z at yaw 0).
+    await page.focus('#terrain');
+    await page.keyboard.down('KeyW');
+    const held = await state(page);
+    await sleep(1500);
+    await page.keyboard.up('KeyW');
+    report.heldFrames = (await state(page)).frames - held.frames;
+    await sleep(300);
+    report.after = await state(page);
+    report.moved = await captureTo(page, `${mode}-moved`);
+    // A corrupt heightmap file: a message on the page, not a crash.
+    const input = await page.$('#file');
+    await input.uploadFile(corrupt);
+    report.corrupt = await waitFor(page, 'the corrupt file to be refused', errorShown, 60);
+    report.afterCorrupt = await state(page);
+    return report;
+  } catch (error) {
+    report.failure = String(error?.stack ?? error);
+    return report;
+  } finally {
+    await browser.close();
+  }
+}
+
+for (const mode of Object.keys(modes)) {
+  const report = await run(mode);
+  writeFileSync(join(out, `${mode}.json`), JSON.stringify(report, null, 2));
+  console.log(`${mode}: ${report.failure ?? report.before?.api ?? report.error ?? 'done'}`);
+}

@@ -1,0 +1,216 @@
+//! The page in a real browser: builds it (`web/build.sh`), serves it on 127.0.0.1, and has
+//! `browser.mjs` drive Debian's headless Chromium with WebGPU, with WebGL2 only, and with
+//! neither; then checks what it saw. Needs Debian's `rustc-web cargo-web rust-web-src lld-22
+//! chromium`, `wasm-bindgen-cli` and `npm ci` in `web/tests` (as `.ci/run` installs); skipped
+//! loudly without them, except under CI.
+
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use image::RgbaImage;
+use serde_json::Value;
+use terrain::render::{Backend, FrameView, Gpu};
+use terrain::world::procedural::{self, ProceduralOptions};
+use terrain::{SceneConfig, Settings};
+
+fn web_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+/// What the test needs that a machine may lack.
+fn missing_tools() -> Vec<String> {
+    let mut missing = Vec::new();
+    for (path, what) in [
+        ("/usr/bin/chromium", "chromium"),
+        ("/usr/bin/wasm-ld-22", "lld-22"),
+        ("/usr/lib/rustlib/src/rust/library/std", "rust-web-src"),
+    ] {
+        if !Path::new(path).exists() {
+            missing.push(what.to_string());
+        }
+    }
+    if !web_dir().join("tests/node_modules/puppeteer-core").is_dir() {
+        missing.push("puppeteer-core (npm ci in web/tests)".into());
+    }
+    if Command::new("wasm-bindgen").arg("--version").output().is_err() {
+        missing.push("wasm-bindgen-cli".into());
+    }
+    missing
+}
+
+/// A static file server on a free port of 127.0.0.1, stopped when dropped.
+struct Server {
+    child: Child,
+    port: u16,
+}
+
+impl Server {
+    fn start(dir: &Path) -> Self {
+        let port = TcpListener::bind("127.0.0.1:0").and_then(|l| l.local_addr()).expect("a free port").port();
+        let child = Command::new(web_dir().join("serve.sh"))
+            .arg(port.to_string())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("web/serve.sh starts");
+        let started = Instant::now();
+        while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(started.elapsed() < Duration::from_secs(30), "the server did not start");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        assert!(dir.join("index.html").is_file());
+        Self { child, port }
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        // serve.sh execs Python: killing it stops the server.
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn read_json(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|error| panic!("{}: {error}", path.display()));
+    serde_json::from_str(&text).expect("valid JSON")
+}
+
+/// A frame `browser.mjs` read back from the page.
+fn read_frame(dir: &Path, name: &str, info: &Value) -> RgbaImage {
+    let (width, height) =
+        (info["width"].as_u64().expect("width") as u32, info["height"].as_u64().expect("height") as u32);
+    let bytes = std::fs::read(dir.join(format!("{name}.rgba"))).expect("frame bytes");
+    RgbaImage::from_raw(width, height, bytes).expect("a whole frame")
+}
+
+/// Mean absolute difference of two images' colour channels, in 8-bit steps.
+fn mean_difference(a: &RgbaImage, b: &RgbaImage) -> f64 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let sum: u64 = a
+        .pixels()
+        .zip(b.pixels())
+        .flat_map(|(p, q)| (0..3).map(move |c| u64::from(p[c].abs_diff(q[c]))))
+        .sum();
+    sum as f64 / (3.0 * f64::from(a.width()) * f64::from(a.height()))
+}
+
+/// The mean colour of a block of `image` centred on (`x`, `y`).
+fn mean_colour(image: &RgbaImage, x: u32, y: u32) -> [f64; 3] {
+    let mut sum = [0.0; 3];
+    let mut count = 0.0;
+    for j in y - 4..=y + 4 {
+        for i in x - 4..=x + 4 {
+            let pixel = image.get_pixel(i, j);
+            for c in 0..3 {
+                sum[c] += f64::from(pixel[c]);
+            }
+            count += 1.0;
+        }
+    }
+    sum.map(|s| s / count)
+}
+
+/// Sky at the top, land below it, sea at the horizon, where the native render has them.
+fn check_layout(image: &RgbaImage, what: &str) {
+    let sky = mean_colour(image, 100, 40);
+    assert!(sky[2] > sky[0] + 20.0 && sky[2] > 120.0, "{what}: no sky at the top: {sky:?}");
+    let land = mean_colour(image, 160, 320);
+    assert!(land[1] > land[2] + 10.0, "{what}: no green land in front: {land:?}");
+    let sea = mean_colour(image, 330, 200);
+    assert!(sea[2] > sea[0] && sea[1] > sea[0], "{what}: no sea at the horizon: {sea:?}");
+}
+
+#[test]
+fn the_page_draws_moves_and_reports_errors_in_chromium() {
+    let missing = missing_tools();
+    if !missing.is_empty() {
+        let reason = format!("missing {}", missing.join(", "));
+        assert!(std::env::var_os("CI").is_none(), "the browser test cannot run under CI: {reason}");
+        test_skips::skip("web page in headless Chromium", &reason);
+        return;
+    }
+    let built = Command::new(web_dir().join("build.sh")).status().expect("web/build.sh runs");
+    assert!(built.success(), "web/build.sh failed");
+    let server = Server::start(&web_dir().join("dist"));
+    let out = tempfile::tempdir().expect("temp dir");
+    let corrupt = out.path().join("broken-heightmap.png");
+    let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
+    bytes.extend((0..300u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8));
+    std::fs::write(&corrupt, bytes).expect("corrupt file");
+    let status = Command::new("node")
+        .arg(web_dir().join("tests/browser.mjs"))
+        .args(["--url", &format!("http://127.0.0.1:{}", server.port)])
+        .arg("--out")
+        .arg(out.path())
+        .arg("--corrupt")
+        .arg(&corrupt)
+        .current_dir(web_dir().join("tests"))
+        .status()
+        .expect("node runs");
+    drop(server);
+    assert!(status.success(), "browser.mjs failed");
+
+    // The same world, camera and time, rendered natively.
+    let options = ProceduralOptions { seed: 1, heightmap_size: 512 };
+    let config = SceneConfig::default();
+    let world = procedural::generate(options, &config, &mut |_| {}).expect("world");
+    let gpu = Gpu::headless(Backend::Auto).expect("a GPU (Mesa's lavapipe)");
+    let view = FrameView { pose: config.camera_start, field_of_view_degrees: 45.0, time_seconds: 3.0 };
+    let native =
+        terrain::headless::render_image(&gpu, &world, &config, &Settings::default(), (640, 360), &view)
+            .expect("native frame");
+    check_layout(&native, "native render");
+
+    for (mode, api) in [("webgpu", "WebGPU"), ("webgl", "WebGL2")] {
+        let report = read_json(&out.path().join(format!("{mode}.json")));
+        assert!(report["failure"].is_null(), "{mode}: {}", report["failure"]);
+        assert_eq!(report["pageErrors"], serde_json::json!([]), "{mode}: errors on the page");
+        let before = &report["before"];
+        assert_eq!(before["api"], api, "{mode}: the page reports its API");
+        assert!(before["error"].is_null(), "{mode}: {}", before["error"]);
+        assert_eq!(before["world"], "procedural island, seed 1, 512x512");
+        // Held W: forward is -z at yaw 0.
+        let z = |state: &Value| state["camera"][2].as_f64().expect("camera z");
+        assert_eq!(z(before), 10.0);
+        assert!(z(&report["after"]) < 9.0, "{mode}: W did not move the camera: {}", report["after"]);
+        assert!(report["heldFrames"].as_u64().expect("frames") > 3, "{mode}: no frames while W was held");
+        let corrupt_message = report["corrupt"].as_str().expect("a message for the corrupt file");
+        assert!(
+            corrupt_message.contains("broken-heightmap.png is not a readable image"),
+            "{mode}: {corrupt_message}"
+        );
+        assert!(report["afterCorrupt"]["error"].is_null(), "{mode}: the page stopped after the bad file");
+
+        if report["frame"]["error"].is_string() {
+            // See browser.mjs: SwiftShader's WebGPU in headless Chromium cannot read frames back.
+            eprintln!(
+                "{mode}: frames cannot be read back here ({}); pixels checked on WebGL2",
+                report["frame"]["error"]
+            );
+            continue;
+        }
+        let frame = read_frame(out.path(), &format!("{mode}-frame"), &report["frame"]);
+        check_layout(&frame, &format!("{mode} frame"));
+        let difference = mean_difference(&frame, &native);
+        eprintln!("{mode}: mean difference from the native render {difference:.2} (8-bit steps)");
+        assert!(
+            difference < 1.0,
+            "{mode}: the page's frame differs from the native render by {difference:.2}"
+        );
+        let moved = read_frame(out.path(), &format!("{mode}-moved"), &report["moved"]);
+        assert!(
+            mean_difference(&moved, &frame) > 5.0,
+            "{mode}: the picture did not change as the camera moved"
+        );
+        // What the compositor shows (the page's status box covers the top right).
+        let screenshot =
+            image::open(out.path().join(format!("{mode}-screenshot.png"))).expect("screenshot").to_rgba8();
+        check_layout(&screenshot, &format!("{mode} screenshot"));
+    }
+    let none = read_json(&out.path().join("none.json"));
+    let message = none["error"].as_str().expect("a message without WebGPU and WebGL2");
+    assert!(message.contains("neither WebGPU nor WebGL2"), "{message}");
+}
