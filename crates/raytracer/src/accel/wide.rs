@@ -19,6 +19,7 @@
 //! bounding box: the caller tests the items of a leaf and says how far the ray may still go.
 
 use glam::DVec3;
+use smallvec::{SmallVec, smallvec};
 
 use crate::geometry::{Bounds, Ray};
 
@@ -90,32 +91,33 @@ impl Box32 {
         points.iter().fold(Box32::EMPTY, |b, p| b.include(*p))
     }
 
-    /// This box grown to hold `p`.
+    /// This box grown to hold `p` (NaN coordinates of `p` are ignored).
     #[inline]
     pub fn include(self, p: [f32; 3]) -> Box32 {
         Box32 {
-            lo: [self.lo[0].min(p[0]), self.lo[1].min(p[1]), self.lo[2].min(p[2])],
-            hi: [self.hi[0].max(p[0]), self.hi[1].max(p[1]), self.hi[2].max(p[2])],
+            lo: [lower(self.lo[0], p[0]), lower(self.lo[1], p[1]), lower(self.lo[2], p[2])],
+            hi: [upper(self.hi[0], p[0]), upper(self.hi[1], p[1]), upper(self.hi[2], p[2])],
         }
     }
 
-    /// The smallest box holding both.
+    /// The smallest box holding both (NaN coordinates of `o` are ignored).
     #[inline]
     pub fn union(self, o: Box32) -> Box32 {
         Box32 {
-            lo: [self.lo[0].min(o.lo[0]), self.lo[1].min(o.lo[1]), self.lo[2].min(o.lo[2])],
-            hi: [self.hi[0].max(o.hi[0]), self.hi[1].max(o.hi[1]), self.hi[2].max(o.hi[2])],
+            lo: [lower(self.lo[0], o.lo[0]), lower(self.lo[1], o.lo[1]), lower(self.lo[2], o.lo[2])],
+            hi: [upper(self.hi[0], o.hi[0]), upper(self.hi[1], o.hi[1]), upper(self.hi[2], o.hi[2])],
         }
     }
 
     /// Half the surface area (the SAH only needs relative areas); 0 for an empty box.
     #[inline]
     fn half_area(&self) -> f32 {
-        let d = [
-            (self.hi[0] - self.lo[0]).max(0.0),
-            (self.hi[1] - self.lo[1]).max(0.0),
-            (self.hi[2] - self.lo[2]).max(0.0),
-        ];
+        // Negative or NaN extents (an empty box, an infinite one) count as 0.
+        let extent = |axis: usize| {
+            let d = self.hi[axis] - self.lo[axis];
+            if d > 0.0 { d } else { 0.0 }
+        };
+        let d = [extent(0), extent(1), extent(2)];
         let a = d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
         if a.is_finite() { a } else { f32::MAX }
     }
@@ -137,6 +139,20 @@ impl Box32 {
             max: DVec3::new(self.hi[0] as f64, self.hi[1] as f64, self.hi[2] as f64),
         }
     }
+}
+
+/// `a.min(b)`, for `a` that is not NaN: `b` when it is smaller, else `a` (so a NaN `b` is
+/// ignored). One instruction, where `f32::min` takes several to handle a NaN `a` too; boxes are
+/// grown this way millions of times while a tree is built.
+#[inline(always)]
+fn lower(a: f32, b: f32) -> f32 {
+    if b < a { b } else { a }
+}
+
+/// `a.max(b)`, for `a` that is not NaN (see [`lower`]).
+#[inline(always)]
+fn upper(a: f32, b: f32) -> f32 {
+    if b > a { b } else { a }
 }
 
 /// A ray prepared for box tests in single precision.
@@ -279,7 +295,8 @@ impl WideBvh {
         let params = BuildParams { max_leaf: params.max_leaf.clamp(1, MAX_LEAF), ..params };
         let mut nodes = Vec::with_capacity(items.len() / 3 + 1);
         let bounds = items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
-        let root = build_subtree(&mut items, 0, bounds, &mut nodes, params);
+        let group = Group { bounds, centroids: centroid_bounds(&items) };
+        let root = build_subtree(&mut items, 0, group, &mut nodes, params);
         bvh.order = items.iter().map(|it| it.index).collect();
         bvh.nodes = nodes;
         bvh.root = root.reference;
@@ -472,31 +489,40 @@ fn leaf_reference(first: u32, count: u32) -> u32 {
     LEAF | (count - 1) << 28 | first
 }
 
+/// The boxes of a group of items: around the items, and around their centres (doubled, as
+/// [`Box32::centre2`] keeps them).
+#[derive(Clone, Copy)]
+struct Group {
+    bounds: Box32,
+    centroids: Box32,
+}
+
 /// Builds the subtree over `items` (whose first item is item `offset` of the whole order, and
-/// whose box is `bounds`) and appends its nodes to `nodes`; returns its box and reference.
+/// whose boxes are `group`) and appends its nodes to `nodes`; returns its box and reference.
 fn build_subtree(
     items: &mut [BuildItem],
     offset: usize,
-    bounds: Box32,
+    group: Group,
     nodes: &mut Vec<Node>,
     params: BuildParams,
 ) -> Built {
+    let bounds = group.bounds;
     if items.len() <= params.max_leaf {
         return Built { bounds, reference: leaf_reference(offset as u32, items.len() as u32) };
     }
     // Split into up to four groups: split the group with the largest box until there are four
     // (groups small enough for a leaf that the SAH keeps whole are not split).
-    let mut groups: Vec<(usize, usize, Box32)> = vec![(0, items.len(), bounds)];
+    let mut groups: SmallVec<[(usize, usize, Group); WIDTH]> = smallvec![(0, items.len(), group)];
     while groups.len() < WIDTH {
         let candidate = groups
             .iter()
             .enumerate()
             .filter(|(_, (s, e, _))| e - s > params.max_leaf)
-            .max_by(|a, b| a.1.2.half_area().total_cmp(&b.1.2.half_area()))
+            .max_by(|a, b| a.1.2.bounds.half_area().total_cmp(&b.1.2.bounds.half_area()))
             .map(|(i, _)| i);
         let Some(g) = candidate else { break };
-        let (s, e, group_bounds) = groups[g];
-        let (count, left, right) = split(&mut items[s..e], &group_bounds, params);
+        let (s, e, whole) = groups[g];
+        let (count, left, right) = split(&mut items[s..e], &whole, params);
         let mid = s + count;
         groups[g] = (s, mid, left);
         groups.insert(g + 1, (mid, e, right));
@@ -508,9 +534,9 @@ fn build_subtree(
         child: [EMPTY; WIDTH],
     });
     // Build the children; big ones in parallel (each into its own node list, appended after).
-    let mut children: Vec<Built> = Vec::with_capacity(WIDTH);
+    let mut children: SmallVec<[Built; WIDTH]> = SmallVec::new();
     let big = items.len() >= PARALLEL_ITEMS;
-    let mut slices: Vec<(usize, Box32, &mut [BuildItem])> = Vec::with_capacity(WIDTH);
+    let mut slices: SmallVec<[(usize, Group, &mut [BuildItem]); WIDTH]> = SmallVec::new();
     let mut rest: &mut [BuildItem] = items;
     let mut consumed = 0;
     for &(s, e, b) in &groups {
@@ -523,6 +549,7 @@ fn build_subtree(
     if big {
         use rayon::prelude::*;
         let parts: Vec<(Built, Vec<Node>)> = slices
+            .into_vec()
             .into_par_iter()
             .map(|(off, b, slice)| {
                 let mut local = Vec::new();
@@ -558,9 +585,18 @@ fn build_subtree(
 }
 
 /// The SAH cost of a leaf of `n` items, relative to the box's area.
+#[inline]
 fn leaf_cost(n: usize, params: BuildParams) -> f32 {
-    let g = params.leaf_granularity.max(1);
-    (n.div_ceil(g) * g) as f32 * params.item_cost
+    // Without a division when every size counts (a split's sweep asks 90 times).
+    let g = params.leaf_granularity;
+    let size = if g <= 1 {
+        n
+    } else if g.is_power_of_two() {
+        (n + g - 1) & !(g - 1)
+    } else {
+        n.div_ceil(g) * g
+    };
+    size as f32 * params.item_cost
 }
 
 /// The best binned SAH split found: its cost relative to the box's area, the axis, the last bin
@@ -579,8 +615,16 @@ struct Split {
 impl Split {
     #[inline]
     fn goes_left(&self, it: &BuildItem) -> bool {
-        (((it.centre[self.axis] - self.centroid_lo) * self.scale) as usize).min(BINS - 1) <= self.bin
+        bin_of(it.centre[self.axis], self.centroid_lo, self.scale) <= self.bin
     }
+}
+
+/// The bin of a centre coordinate `c` on an axis whose centroids start at `lo`, with `scale` bins
+/// a unit: `(c - lo) * scale` rounded down, clamped to the bins (NaN to the first).
+#[inline(always)]
+fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
+    // Through `i32`: a saturating conversion to `i32` takes fewer instructions than to `usize`.
+    (((c - lo) * scale) as i32).clamp(0, BINS as i32 - 1) as usize
 }
 
 /// Item boxes and counts per bin, on each axis.
@@ -604,7 +648,7 @@ impl Bins {
         let mut bins = Bins::empty();
         for it in items {
             for axis in 0..3 {
-                let b = (((it.centre[axis] - lo[axis]) * scale[axis]) as usize).min(BINS - 1);
+                let b = bin_of(it.centre[axis], lo[axis], scale[axis]);
                 bins.boxes[axis][b] = bins.boxes[axis][b].union(it.bounds);
                 bins.counts[axis][b] += 1;
             }
@@ -642,9 +686,9 @@ fn centroid_bounds(items: &[BuildItem]) -> Box32 {
 
 /// The best binned SAH split of `items` over all three axes, if the items' centres are not all
 /// in one place.
-fn sah_split(items: &[BuildItem], bounds: &Box32, params: BuildParams) -> Option<Split> {
-    let cb = centroid_bounds(items);
-    let area = bounds.half_area().max(f32::MIN_POSITIVE);
+fn sah_split(items: &[BuildItem], group: &Group, params: BuildParams) -> Option<Split> {
+    let cb = group.centroids;
+    let area = group.bounds.half_area().max(f32::MIN_POSITIVE);
     let scale: [f32; 3] = std::array::from_fn(|axis| {
         let extent = cb.hi[axis] - cb.lo[axis];
         if extent > 0.0 { BINS as f32 / extent } else { 0.0 }
@@ -697,29 +741,39 @@ fn sah_split(items: &[BuildItem], bounds: &Box32, params: BuildParams) -> Option
     best
 }
 
-/// Splits `items` (with box `bounds`) in two, reordering them; returns the size of the first
+/// Splits `items` (with boxes `group`) in two, reordering them; returns the size of the first
 /// part, in `1..len`, and the boxes of both parts.
-fn split(items: &mut [BuildItem], bounds: &Box32, params: BuildParams) -> (usize, Box32, Box32) {
+fn split(items: &mut [BuildItem], group: &Group, params: BuildParams) -> (usize, Group, Group) {
     let n = items.len();
-    if let Some(best) = sah_split(items, bounds, params) {
-        let mut first = 0;
+    if let Some(best) = sah_split(items, group, params) {
+        // The parts' centroid boxes are gathered on the way (the next splits need them).
+        let (mut first, mut left_centroids, mut right_centroids) = (0, Box32::EMPTY, Box32::EMPTY);
         for i in 0..n {
             if best.goes_left(&items[i]) {
+                left_centroids = left_centroids.include(items[i].centre);
                 items.swap(first, i);
                 first += 1;
+            } else {
+                right_centroids = right_centroids.include(items[i].centre);
             }
         }
         if first > 0 && first < n {
-            return (first, best.left, best.right);
+            return (
+                first,
+                Group { bounds: best.left, centroids: left_centroids },
+                Group { bounds: best.right, centroids: right_centroids },
+            );
         }
     }
     // All centroids coincide (or binning could not separate them): split in the middle of the
     // longest axis's order.
-    let cb = centroid_bounds(items);
+    let cb = group.centroids;
     let axis = (0..3).max_by(|&a, &b| (cb.hi[a] - cb.lo[a]).total_cmp(&(cb.hi[b] - cb.lo[b]))).unwrap_or(0);
     let mid = n / 2;
     items.select_nth_unstable_by(mid, |a, b| a.centre[axis].total_cmp(&b.centre[axis]));
-    let left = items[..mid].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
-    let right = items[mid..].iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
-    (mid, left, right)
+    let part = |items: &[BuildItem]| Group {
+        bounds: items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds)),
+        centroids: centroid_bounds(items),
+    };
+    (mid, part(&items[..mid]), part(&items[mid..]))
 }

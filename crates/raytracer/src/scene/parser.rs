@@ -8,7 +8,7 @@
 
 use std::collections::HashMap;
 use std::fmt;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use glam::{DVec2, DVec3};
 
@@ -95,16 +95,15 @@ impl fmt::Display for SceneError {
 /// Parses a scene file. Returns the scene and its warnings, or every diagnostic when there is an
 /// error. Never panics, whatever the input.
 pub fn parse(source: &SourceFile) -> Result<Parsed, SceneError> {
-    let mut parser = Parser {
-        source,
-        diagnostics: Vec::new(),
-        kept: Omitted::default(),
-        omitted: Omitted::default(),
-        scratch: Diagnostic::general(Severity::Note, ""),
-        scene: Scene::empty(),
-        seen: Seen::default(),
-        materials: HashMap::new(),
-    };
+    match parse_in_pieces(source) {
+        Some(parsed) => Ok(parsed),
+        None => parse_line_by_line(source),
+    }
+}
+
+/// [`parse`], one line after the other.
+fn parse_line_by_line(source: &SourceFile) -> Result<Parsed, SceneError> {
+    let mut parser = Parser::new(source);
     parser.run();
     let Parser { mut diagnostics, omitted, scene, .. } = parser;
     // File order; diagnostics about the whole file last.
@@ -114,6 +113,84 @@ pub fn parse(source: &SourceFile) -> Result<Parsed, SceneError> {
     } else {
         Ok(Parsed { scene, diagnostics, omitted })
     }
+}
+
+/// Files of at least twice this many lines are parsed in pieces of about this many lines, in
+/// parallel (see [`parse_in_pieces`]).
+const PIECE_LINES: u32 = 1 << 16;
+
+/// Parses a large file in pieces of about [`PIECE_LINES`] lines, each starting at a line that
+/// opens a block, on all threads; returns the scene only when it is certainly the one the parse
+/// line by line gives: every piece ends outside any block (so each next piece starts where the
+/// whole-file parse is at the top level), no piece has anything to report, and the file has at
+/// most one `background` and one `camera` block and describes something. Otherwise `None`: the
+/// file is then parsed line by line, which reports its problems in order. The pieces depend on
+/// the text only, so the scene does not depend on the thread count; equal untextured materials
+/// are shared across pieces as within one (which piece's copy all share may vary; they are
+/// equal).
+fn parse_in_pieces(source: &SourceFile) -> Option<Parsed> {
+    use rayon::prelude::*;
+    let lines = source.line_count();
+    if lines < 2 * PIECE_LINES {
+        return None;
+    }
+    let mut starts = vec![1];
+    let mut tokens = Vec::new();
+    let mut next = 1 + PIECE_LINES;
+    while next <= lines {
+        let Some(start) = (next..=lines).find(|&n| {
+            tokenize(source.line(n), &mut tokens);
+            tokens.first().is_some_and(|t| is_block_keyword(t.text))
+        }) else {
+            break;
+        };
+        starts.push(start);
+        next = start + PIECE_LINES;
+    }
+    let ranges: Vec<(u32, u32)> = starts
+        .iter()
+        .zip(starts.iter().skip(1).map(|s| s - 1).chain([lines]))
+        .map(|(&a, b)| (a, b))
+        .collect();
+    let materials = Mutex::new(HashMap::new());
+    let pieces: Vec<Option<Parser>> = ranges
+        .into_par_iter()
+        .map(|(first, last)| {
+            let mut parser = Parser::new(source);
+            parser.pieces_materials = Some(&materials);
+            let state = parser.run_lines(first, last);
+            let clean = matches!(state, State::TopLevel)
+                && parser.diagnostics.is_empty()
+                && parser.omitted == Omitted::default();
+            clean.then_some(parser)
+        })
+        .collect();
+    let mut scene = Scene::empty();
+    scene.primitives.reserve_exact(pieces.iter().flatten().map(|p| p.scene.primitives.len()).sum());
+    let (mut background, mut camera) = (false, false);
+    for piece in pieces {
+        let piece = piece?;
+        if piece.seen.background.is_some() {
+            if background {
+                return None;
+            }
+            background = true;
+            scene.background = piece.scene.background;
+        }
+        if piece.seen.camera.is_some() {
+            if camera {
+                return None;
+            }
+            camera = true;
+            scene.camera = piece.scene.camera;
+        }
+        scene.lights.extend(piece.scene.lights);
+        scene.primitives.extend(piece.scene.primitives);
+    }
+    if scene.primitives.is_empty() && scene.lights.is_empty() {
+        return None;
+    }
+    Some(Parsed { scene, diagnostics: Vec::new(), omitted: Omitted::default() })
 }
 
 fn parser_has_errors(diagnostics: &[Diagnostic], omitted: Omitted) -> bool {
@@ -151,6 +228,36 @@ impl Token<'_> {
 /// Splits a line into `tokens` (cleared first), dropping the comment (from the first `#` or `//`).
 fn tokenize<'a>(line: &'a str, tokens: &mut Vec<Token<'a>>) {
     tokens.clear();
+    if !line.is_ascii() {
+        tokenize_chars(line, tokens);
+        return;
+    }
+    // ASCII (nearly every line of a scene file): a column is a byte. `u8::is_ascii_whitespace`
+    // leaves out the vertical tab, which `char::is_whitespace` counts.
+    let bytes = line.as_bytes();
+    let blank = |b: u8| b.is_ascii_whitespace() || b == 0x0B;
+    let comment = |i: usize| bytes[i] == b'#' || (bytes[i] == b'/' && bytes.get(i + 1) == Some(&b'/'));
+    let mut i = 0;
+    while i < bytes.len() {
+        if blank(bytes[i]) {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < bytes.len() && !blank(bytes[i]) && !comment(i) {
+            i += 1;
+        }
+        if i > start {
+            tokens.push(Token { text: &line[start..i], column: start as u32 + 1, len: (i - start) as u32 });
+        }
+        if i < bytes.len() && comment(i) {
+            break;
+        }
+    }
+}
+
+/// [`tokenize`] for a line with characters beyond ASCII: columns count characters.
+fn tokenize_chars<'a>(line: &'a str, tokens: &mut Vec<Token<'a>>) {
     let mut start: Option<(usize, u32)> = None;
     let mut column = 0u32;
     let mut chars = line.char_indices().peekable();
@@ -172,8 +279,13 @@ fn tokenize<'a>(line: &'a str, tokens: &mut Vec<Token<'a>>) {
     }
     if let Some((s, c)) = start {
         let text = &line[s..end_of_code];
-        tokens.push(Token { text, column: c, len: text.chars().count() as u32 });
+        tokens.push(Token { text, column: c, len: char_count(text) });
     }
+}
+
+/// The number of characters of `text` (its length when it is ASCII, as scene text nearly always is).
+fn char_count(text: &str) -> u32 {
+    if text.is_ascii() { text.len() as u32 } else { text.chars().count() as u32 }
 }
 
 /// The kinds of block.
@@ -334,8 +446,37 @@ struct OpenBlock<'s> {
     kind: BlockKind,
     header: Span,
     entries: Vec<Entry<'s>>,
-    /// The entry of each key (a hostile block may hold a million keys).
+    /// The entry of each key, once there are more than [`INDEXED_ENTRIES`] (a hostile block may
+    /// hold a million keys); smaller blocks are searched in order.
     index: HashMap<&'s str, usize>,
+}
+
+/// Blocks with more key lines than this find their keys through an index.
+const INDEXED_ENTRIES: usize = 16;
+
+impl<'s> OpenBlock<'s> {
+    /// The position in `entries` of the entry of `key` (for a repeatable key, of one of them).
+    fn position(&self, key: &str) -> Option<usize> {
+        if self.entries.len() > INDEXED_ENTRIES {
+            self.index.get(key).copied()
+        } else {
+            self.entries.iter().position(|e| e.key == key)
+        }
+    }
+
+    /// Adds the entry of a key not seen before, or of a repeatable key.
+    fn push(&mut self, entry: Entry<'s>) {
+        let key = entry.key;
+        self.entries.push(entry);
+        let n = self.entries.len();
+        if n == INDEXED_ENTRIES + 1 {
+            for (i, e) in self.entries.iter().enumerate() {
+                self.index.insert(e.key, i);
+            }
+        } else if n > INDEXED_ENTRIES {
+            self.index.insert(key, n - 1);
+        }
+    }
 }
 
 /// Parser state between lines.
@@ -366,9 +507,29 @@ struct Parser<'s> {
     seen: Seen,
     /// Untextured materials seen so far, by their numbers' bits (see [`Parser::share`]).
     materials: HashMap<[u64; 12], Arc<Material>>,
+    /// When the file is read in pieces, the materials of all pieces, which every piece shares.
+    pieces_materials: Option<&'s Mutex<HashMap<[u64; 12], Arc<Material>>>>,
+    /// The emptied entry list of the last block read, for the next block to fill (a scene of a
+    /// million spheres then allocates no list per block).
+    spare_entries: Vec<Entry<'s>>,
 }
 
 impl<'s> Parser<'s> {
+    fn new(source: &'s SourceFile) -> Parser<'s> {
+        Parser {
+            source,
+            diagnostics: Vec::new(),
+            kept: Omitted::default(),
+            omitted: Omitted::default(),
+            scratch: Diagnostic::general(Severity::Note, ""),
+            scene: Scene::empty(),
+            seen: Seen::default(),
+            materials: HashMap::new(),
+            pieces_materials: None,
+            spare_entries: Vec::new(),
+        }
+    }
+
     /// The shared copy of an untextured material equal to `m` (a scene of a million spheres in a
     /// handful of materials keeps a handful); textured materials stay their own (their texture
     /// reference names the line that set it).
@@ -381,7 +542,19 @@ impl<'s> Parser<'s> {
             m.absor.y, m.absor.z,
         ]
         .map(f64::to_bits);
-        self.materials.entry(key).or_insert_with(|| Arc::new(m)).clone()
+        if let Some(shared) = self.materials.get(&key) {
+            return shared.clone();
+        }
+        let shared = match self.pieces_materials {
+            // The copy of the first piece to meet it.
+            Some(all) => {
+                let mut all = all.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+                all.entry(key).or_insert_with(|| Arc::new(m)).clone()
+            }
+            None => Arc::new(m),
+        };
+        self.materials.insert(key, shared.clone());
+        shared
     }
 
     fn report(&mut self, severity: Severity, span: Span, message: impl Into<String>) -> &mut Diagnostic {
@@ -413,12 +586,29 @@ impl<'s> Parser<'s> {
     }
 
     fn run(&mut self) {
+        let state = self.run_lines(1, self.source.line_count());
+        self.finish_file(state);
+    }
+
+    /// Reads lines `first..=last` (1-based) from the top level; returns the state after them.
+    fn run_lines(&mut self, first: u32, last: u32) -> State<'s> {
         let mut state = State::TopLevel;
         let source = self.source;
         let mut tokens = Vec::new();
-        for (number, line) in source.lines() {
+        for number in first..=last {
+            let line = source.line(number);
             tokenize(line, &mut tokens);
             let Some(first) = tokens.first() else { continue };
+            // The common lines first, without moving the state: a key line of an open block, and
+            // a line of a block being skipped.
+            match &mut state {
+                State::InBlock(block) if first.text != "end" && !is_block_keyword(first.text) => {
+                    self.key_line(number, &tokens, block);
+                    continue;
+                }
+                State::Skipping(_) if first.text != "end" => continue,
+                _ => {}
+            }
             state = match state {
                 State::TopLevel => self.top_level_line(number, &tokens),
                 State::Skipping(header) => {
@@ -447,6 +637,11 @@ impl<'s> Parser<'s> {
                 }
             };
         }
+        state
+    }
+
+    /// Closes what the end of the file leaves open, and notes a file that describes nothing.
+    fn finish_file(&mut self, state: State<'s>) {
         match state {
             State::TopLevel => {}
             State::InBlock(block) => {
@@ -474,8 +669,9 @@ impl<'s> Parser<'s> {
     fn top_level_line(&mut self, line: u32, tokens: &[Token<'s>]) -> State<'s> {
         let first = tokens[0];
         let span = first.span(line);
+        let entries = std::mem::take(&mut self.spare_entries);
         let start = |kind: BlockKind, header: Span| {
-            State::InBlock(OpenBlock { kind, header, entries: Vec::new(), index: HashMap::new() })
+            State::InBlock(OpenBlock { kind, header, entries, index: HashMap::new() })
         };
         match first.text {
             "background" | "camera" => {
@@ -547,7 +743,7 @@ impl<'s> Parser<'s> {
     fn key_line(&mut self, line: u32, tokens: &[Token<'s>], block: &mut OpenBlock<'s>) {
         let first = tokens[0];
         let (key, key_len, glued, rest) = match first.text.split_once('=') {
-            Some((key, after)) => (key, key.chars().count() as u32 + 1, after, &tokens[1..]),
+            Some((key, after)) => (key, char_count(key) + 1, after, &tokens[1..]),
             None => match tokens.get(1) {
                 Some(second) if second.text.starts_with('=') => {
                     self.warning(
@@ -574,7 +770,7 @@ impl<'s> Parser<'s> {
         }
         let glued_value = (!glued.is_empty()).then(|| {
             let column = first.column + key_len;
-            (glued, Span { line, column, len: glued.chars().count() as u32 })
+            (glued, Span { line, column, len: char_count(glued) })
         });
         let mut values = Values::new();
         for v in
@@ -592,7 +788,7 @@ impl<'s> Parser<'s> {
         };
         let repeatable = block.kind == BlockKind::Primitive(PrimitiveKind::Bezier) && key == BEZIER_POINT_KEY;
         let entry = Entry { key, key_span, values, value_count, all_values };
-        match block.index.get(key).copied().filter(|_| !repeatable) {
+        match block.position(key).filter(|_| !repeatable) {
             Some(previous) => {
                 let earlier = block.entries[previous].key_span.line;
                 self.warning(
@@ -601,10 +797,7 @@ impl<'s> Parser<'s> {
                 );
                 block.entries[previous] = entry;
             }
-            None => {
-                block.index.insert(key, block.entries.len());
-                block.entries.push(entry);
-            }
+            None => block.push(entry),
         }
     }
 
@@ -640,7 +833,7 @@ struct BlockReader<'p, 's> {
     /// The last entry of each key (later lines win), in file order of their first line.
     entries: Vec<Entry<'s>>,
     /// Whether each entry was read.
-    used: Vec<bool>,
+    used: smallvec::SmallVec<[bool; 32]>,
     /// The control points of a `primitive bezier` block (`P=` lines), in file order.
     points: Vec<Entry<'s>>,
     parser: &'p mut Parser<'s>,
@@ -649,15 +842,25 @@ struct BlockReader<'p, 's> {
 impl<'p, 's> BlockReader<'p, 's> {
     fn new(block: OpenBlock<'s>, parser: &'p mut Parser<'s>) -> Self {
         let bezier = block.kind == BlockKind::Primitive(PrimitiveKind::Bezier);
-        let (points, entries): (Vec<Entry<'s>>, Vec<Entry<'s>>) =
-            block.entries.into_iter().partition(|e| bezier && e.key == BEZIER_POINT_KEY);
-        let used = vec![false; entries.len()];
+        let (points, entries): (Vec<Entry<'s>>, Vec<Entry<'s>>) = if bezier {
+            block.entries.into_iter().partition(|e| e.key == BEZIER_POINT_KEY)
+        } else {
+            (Vec::new(), block.entries)
+        };
+        let used = smallvec::smallvec![false; entries.len()];
         BlockReader { kind: block.kind, header: block.header, entries, used, points, parser }
+    }
+
+    /// The position of the entry of `key`, if the block has one.
+    fn position(&self, key: &str) -> Option<usize> {
+        // The first bytes compared before the whole keys: most keys differ there.
+        let first = key.as_bytes().first();
+        self.entries.iter().position(|e| e.key.as_bytes().first() == first && e.key == key)
     }
 
     /// The entry of `key`, if the block has one.
     fn find(&self, key: &str) -> Option<&Entry<'s>> {
-        self.entries.iter().find(|e| e.key == key)
+        self.position(key).map(|i| &self.entries[i])
     }
 
     /// Whether the block sets `key=`.
@@ -667,7 +870,7 @@ impl<'p, 's> BlockReader<'p, 's> {
 
     /// The entry of `key`, marked as used.
     fn entry(&mut self, key: &str) -> Option<Entry<'s>> {
-        let i = self.entries.iter().position(|e| e.key == key)?;
+        let i = self.position(key)?;
         self.used[i] = true;
         Some(self.entries[i].clone())
     }
@@ -684,31 +887,39 @@ impl<'p, 's> BlockReader<'p, 's> {
         self.parser.warning(span, message)
     }
 
-    /// Parses `n` numbers of `key`.
-    fn numbers(&mut self, key: &str, n: usize) -> Lookup<Vec<f64>> {
-        let Some(entry) = self.entry(key) else { return Ok(None) };
-        let what = if n == 1 { "a number".to_owned() } else { format!("{n} numbers") };
-        if entry.value_count != n {
+    /// Parses the `N` numbers of `key`.
+    fn numbers<const N: usize>(&mut self, key: &str) -> Lookup<[f64; N]> {
+        let Some(i) = self.position(key) else { return Ok(None) };
+        self.used[i] = true;
+        let what = || if N == 1 { "a number".to_owned() } else { format!("{N} numbers") };
+        let entry = &self.entries[i];
+        if entry.value_count != N {
             let found = entry.value_count;
+            let span = entry.values_span();
             let message = if found == 0 {
-                format!("`{key}=` expects {what}")
+                format!("`{key}=` expects {}", what())
             } else {
-                format!("`{key}=` expects {what}, found {found} value{}", if found == 1 { "" } else { "s" })
+                format!(
+                    "`{key}=` expects {}, found {found} value{}",
+                    what(),
+                    if found == 1 { "" } else { "s" }
+                )
             };
-            self.error(entry.values_span(), message);
+            self.error(span, message);
             return Err(Reported);
         }
-        let mut out = Vec::with_capacity(n);
+        let mut out = [0.0; N];
         let mut bad = false;
-        for (text, span) in entry.values.iter() {
+        let values: [(&str, Span); N] = std::array::from_fn(|k| self.entries[i].values[k]);
+        for (slot, (text, span)) in out.iter_mut().zip(values) {
             match text.parse::<f64>() {
-                Ok(v) if v.is_finite() => out.push(v),
+                Ok(v) if v.is_finite() => *slot = v,
                 Ok(_) => {
-                    self.error(*span, format!("`{text}` is not a finite number"));
+                    self.error(span, format!("`{text}` is not a finite number"));
                     bad = true;
                 }
                 Err(_) => {
-                    self.error(*span, format!("`{key}=` expects {what}; `{text}` is not a number"));
+                    self.error(span, format!("`{key}=` expects {}; `{text}` is not a number", what()));
                     bad = true;
                 }
             }
@@ -717,11 +928,11 @@ impl<'p, 's> BlockReader<'p, 's> {
     }
 
     fn number(&mut self, key: &str) -> Lookup<f64> {
-        Ok(self.numbers(key, 1)?.map(|v| v[0]))
+        Ok(self.numbers::<1>(key)?.map(|[v]| v))
     }
 
     fn vec3(&mut self, key: &str) -> Lookup<DVec3> {
-        Ok(self.numbers(key, 3)?.map(|v| DVec3::new(v[0], v[1], v[2])))
+        Ok(self.numbers::<3>(key)?.map(DVec3::from_array))
     }
 
     /// A whole number in `min..=max`.
@@ -1308,7 +1519,7 @@ impl<'p, 's> BlockReader<'p, 's> {
 
     /// Warns about keys the block does not know.
     fn finish(self) {
-        let BlockReader { kind, entries, used, parser, .. } = self;
+        let BlockReader { kind, mut entries, used, parser, .. } = self;
         let mut unknown: Vec<&Entry> =
             entries.iter().zip(&used).filter(|(_, u)| !**u).map(|(e, _)| e).collect();
         unknown.sort_by_key(|e| (e.key_span.line, e.key_span.column));
@@ -1324,6 +1535,8 @@ impl<'p, 's> BlockReader<'p, 's> {
                 ));
             }
         }
+        entries.clear();
+        parser.spare_entries = entries;
     }
 }
 

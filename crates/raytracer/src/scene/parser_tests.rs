@@ -852,3 +852,79 @@ fn equal_untextured_materials_are_shared() {
     assert!(std::sync::Arc::ptr_eq(&prims[0].material, &prims[1].material));
     assert!(!std::sync::Arc::ptr_eq(&prims[0].material, &prims[2].material));
 }
+
+/// A file of `n` spheres in three materials (8 lines each), with the camera block after the
+/// first `camera_after` spheres and `extra` inserted after sphere `extra_after`.
+fn many_spheres(n: usize, camera_after: usize, extra_after: usize, extra: &str) -> String {
+    let mut text =
+        String::from("background\n color= 0.1 0.1 0.1\nend\nlight point\n O= 0 0 5\n color= 1 1 1\nend\n");
+    for i in 0..n {
+        if i == camera_after {
+            text.push_str("camera\n O= 0 -5 0\n N= 0 1 0\n image_W= 64\n image_H= 64\nend\n");
+        }
+        if i == extra_after {
+            text.push_str(extra);
+        }
+        let m = i % 3;
+        text.push_str(&format!(
+            "primitive sphere\n O= {} {} 0\n R= 0.25\n color= 0.{m} 0.5 0.5\n diff= 0.8\n spec= 0.2\n\nend\n",
+            i % 100,
+            i / 100
+        ));
+    }
+    text
+}
+
+/// The scene of `text` parsed line by line (as the file is when it is small or has problems).
+fn parse_line_by_line(text: &str) -> Result<Parsed, SceneError> {
+    super::parse_line_by_line(&source(text))
+}
+
+#[test]
+fn large_files_parsed_in_pieces_give_the_scene_of_one_pass() {
+    // 20,000 spheres: 160,000 lines, three pieces; the camera block in the second.
+    let text = many_spheres(20_000, 12_000, usize::MAX, "");
+    let pieces = parse_in_pieces(&source(&text)).expect("a clean file is parsed in pieces");
+    let whole = parse_line_by_line(&text).expect("valid");
+    assert!(whole.diagnostics.is_empty());
+    assert_eq!(pieces.scene, whole.scene);
+    assert_eq!(pieces.scene.camera.image_width, 64);
+    // Equal materials are shared across pieces as within one: three materials in all.
+    let mut distinct: Vec<*const Material> = Vec::new();
+    for p in &pieces.scene.primitives {
+        if !distinct.contains(&Arc::as_ptr(&p.material)) {
+            distinct.push(Arc::as_ptr(&p.material));
+        }
+    }
+    assert_eq!(distinct.len(), 3);
+    // Small files are not cut.
+    assert!(parse_in_pieces(&source(&many_spheres(100, 0, usize::MAX, ""))).is_none());
+}
+
+#[test]
+fn large_files_with_problems_are_reported_as_line_by_line() {
+    let cases = [
+        // A warning deep in the file (an unknown key), at line 7 + 8 * 15000 + 3.
+        "primitive sphere\n O= 0 0 0\n R= 1\n colour= 1 0 0\nend\n",
+        // A second camera block.
+        "camera\n O= 0 -9 0\nend\n",
+        // A block without `end`, then the next one.
+        "primitive sphere\n O= 0 0 0\n R= 1\n",
+        // An unknown block that swallows the next sphere up to its `end`.
+        "teapot\n",
+    ];
+    for extra in cases {
+        let text = many_spheres(20_000, 0, 15_000, extra);
+        assert!(parse_in_pieces(&source(&text)).is_none(), "{extra}");
+        let from_parse = match parse(&source(&text)) {
+            Ok(p) => p.diagnostics,
+            Err(e) => e.diagnostics,
+        };
+        let expected = match parse_line_by_line(&text) {
+            Ok(p) => p.diagnostics,
+            Err(e) => e.diagnostics,
+        };
+        assert!(!from_parse.is_empty(), "{extra}");
+        assert_eq!(from_parse, expected, "{extra}");
+    }
+}

@@ -140,6 +140,11 @@ impl SourceFile {
         (0..self.line_starts.len()).map(|i| (i as u32 + 1, self.line(i as u32 + 1)))
     }
 
+    /// The number of lines (a final line end starts an empty last line).
+    pub fn line_count(&self) -> u32 {
+        self.line_starts.len() as u32
+    }
+
     /// The text of 1-based line `number`, without its line end (empty past the end).
     pub fn line(&self, number: u32) -> &str {
         let i = number as usize - 1;
