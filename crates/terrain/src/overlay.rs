@@ -1,5 +1,6 @@
-//! An overlay for the window and the web page: egui (its context, its winit input state and its wgpu renderer), drawn
-//! over the frame. Its last shapes are kept, so a screenshot shows what the window shows.
+//! An overlay for the window and the web page: egui (its context, its winit input state and its
+//! wgpu renderer), drawn over the frame. Its last shapes are kept, so a screenshot shows what the
+//! window shows.
 
 use std::sync::Arc;
 

@@ -266,15 +266,24 @@ impl Gpu {
     /// report, naming `what`, joins the errors [`Gpu::check`] returns after the next frames.
     #[cfg(target_arch = "wasm32")]
     pub fn scoped<T>(&self, what: &str, make: impl FnOnce() -> T) -> Result<T, GpuError> {
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let filters =
+            [wgpu::ErrorFilter::Validation, wgpu::ErrorFilter::Internal, wgpu::ErrorFilter::OutOfMemory];
+        let scopes = filters.map(|filter| self.device.push_error_scope(filter));
         let made = make();
+        // Scopes pop in the reverse order of their pushing.
+        let answers: Vec<_> = scopes.into_iter().rev().map(|scope| scope.pop()).collect();
         let (what, sink) = (what.to_string(), Arc::clone(&self.errors));
-        let answer = scope.pop();
         wasm_bindgen_futures::spawn_local(async move {
-            if let Some(error) = answer.await
-                && let Ok(mut list) = sink.lock()
-            {
-                list.push(scope_error(&what, &error).to_string());
+            for (answer, out_of_memory) in answers.into_iter().zip([true, false, false]) {
+                let Some(error) = answer.await else { continue };
+                let error = if out_of_memory {
+                    GpuError::OutOfMemory { what: what.clone(), message: error.to_string() }
+                } else {
+                    scope_error(&what, &error)
+                };
+                if let Ok(mut list) = sink.lock() {
+                    list.push(error.to_string());
+                }
             }
         });
         Ok(made)
