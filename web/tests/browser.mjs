@@ -95,6 +95,12 @@ async function run(mode) {
     await sleep(300);
     report.after = await state(page);
     report.moved = await captureTo(page, `${mode}-moved`);
+    // A click captures the mouse (pointer lock); moving it turns the camera.
+    await page.mouse.click(320, 180);
+    await sleep(300);
+    await page.mouse.move(420, 180, { steps: 5 });
+    await sleep(500);
+    report.turned = await state(page);
     // A corrupt heightmap file: a message on the page, not a crash.
     const input = await page.$('#file');
     await input.uploadFile(corrupt);

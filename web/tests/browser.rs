@@ -177,6 +177,9 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
         assert_eq!(z(before), 10.0);
         assert!(z(&report["after"]) < 9.0, "{mode}: W did not move the camera: {}", report["after"]);
         assert!(report["heldFrames"].as_u64().expect("frames") > 3, "{mode}: no frames while W was held");
+        // A click captures the mouse; 100 pixels to the right turn the camera to the right.
+        let yaw = report["turned"]["camera"][3].as_f64().expect("yaw");
+        assert!(yaw > 5.0, "{mode}: the mouse did not turn the camera: {}", report["turned"]);
         let corrupt_message = report["corrupt"].as_str().expect("a message for the corrupt file");
         assert!(
             corrupt_message.contains("broken-heightmap.png is not a readable image"),

@@ -69,6 +69,8 @@ pub(super) struct PageApp {
     panel: Panel,
     panel_open: bool,
     mouse_captured: bool,
+    /// Whether the browser has granted the pointer lock asked for (see [`Self::redraw`]).
+    lock_seen: bool,
     window: Option<Arc<Window>>,
     /// Filled by the task that opens the GPU.
     opening: Rc<RefCell<Option<Result<Opened, String>>>>,
@@ -94,6 +96,7 @@ impl PageApp {
             panel: Panel::default(),
             panel_open: false,
             mouse_captured: false,
+            lock_seen: false,
             window: None,
             opening: Rc::new(RefCell::new(None)),
             drawing: None,
@@ -177,11 +180,14 @@ impl PageApp {
         }
         self.take_gpu();
         self.take_world();
-        if self.mouse_captured && !page::pointer_locked() {
-            // The browser let the pointer go (Esc, or the tab lost focus).
-            self.mouse_captured = false;
+        // The lock arrives a little after it is asked for; once it has come, its loss means the
+        // browser let the pointer go (Esc, or the tab lost focus).
+        let locked = page::pointer_locked();
+        if self.mouse_captured && self.lock_seen && !locked {
+            self.set_mouse_captured(false);
             self.camera.release_all();
         }
+        self.lock_seen = self.mouse_captured && locked;
         let now = Instant::now();
         // Long stalls (a hidden tab) do not turn into a leap of the camera.
         let step = self.last_frame.map_or(Duration::ZERO, |last| now - last).min(Duration::from_millis(250));
