@@ -2,7 +2,8 @@
 //! waiting for the GPU, without reading the image back, as a window would), for the course's
 //! island, the default procedural island and procedural islands of 4097 and 8193 samples a side,
 //! in both looks; then, for the course island in the modern look, what each of its features costs
-//! (the frame with one feature switched off, measured in the same rounds).
+//! (the frame with one feature switched off, measured in the same rounds); and, for the maps the
+//! course look draws as its static mesh, what culling the hidden mirrored land saves.
 //!
 //! Run with `cargo bench -p terrain`. It forces the Vulkan backend (on a machine without a GPU,
 //! Mesa's lavapipe) unless `RAYTERRA_BENCH_BACKEND` names another (`gl`, `metal`, `dx12`,
@@ -18,7 +19,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use terrain::headless::HeadlessRenderer;
-use terrain::render::{Backend, FrameView, Gpu};
+use terrain::render::{Backend, FrameView, Gpu, MESH_MAX_SIDE};
 use terrain::settings::ReflectionQuality;
 use terrain::world::World;
 use terrain::world::assets::load_course_folder;
@@ -76,6 +77,10 @@ fn main() {
         if matches!(scene, Scene::Course) {
             breakdown(&gpu, &world, &config);
         }
+        // Only the static mesh (maps up to MESH_MAX_SIDE) culls its reflection.
+        if !matches!(scene, Scene::Procedural(size) if size > MESH_MAX_SIDE) {
+            culling(&gpu, &world, &config, name);
+        }
     }
     compare_with_baseline(&results);
 }
@@ -88,6 +93,24 @@ fn measure(
     config: &SceneConfig,
     scene: &str,
     variants: &[(&str, Settings)],
+) -> Vec<(String, f64)> {
+    let variants: Vec<Variant> =
+        variants.iter().map(|(name, settings)| (*name, settings.clone(), true)).collect();
+    measure_variants(gpu, world, config, scene, &variants)
+}
+
+/// A variant to measure: its name, its settings, and whether the course look culls the mirrored
+/// chunks the land hides.
+type Variant<'a> = (&'a str, Settings, bool);
+
+/// Measures `variants` of `world` in interleaved rounds; prints a line each and returns their
+/// medians in milliseconds.
+fn measure_variants(
+    gpu: &Gpu,
+    world: &World,
+    config: &SceneConfig,
+    scene: &str,
+    variants: &[Variant],
 ) -> Vec<(String, f64)> {
     let view = FrameView {
         pose: config.camera_start,
@@ -106,9 +129,10 @@ fn measure(
     let mut times: Vec<Vec<Duration>> = vec![Vec::new(); variants.len()];
     let mut triangles = vec![[0; 2]; variants.len()];
     for round in 0..ROUNDS {
-        for (i, (_, settings)) in variants.iter().enumerate() {
+        for (i, (_, settings, cull)) in variants.iter().enumerate() {
             let switch = Instant::now();
             let ready = headless.renderer_mut().apply(gpu, world, settings).and_then(|()| {
+                headless.renderer_mut().set_cull_hidden_reflection(*cull);
                 // The first frames of a look upload its resources and draw its light map.
                 let warm_up = if round == 0 { WARM_UP_FRAMES } else { 1 };
                 (0..warm_up).try_for_each(|_| headless.draw(gpu, &view))
@@ -136,7 +160,7 @@ fn measure(
         .iter()
         .zip(times.iter_mut())
         .zip(setups.iter().zip(&triangles))
-        .map(|(((name, _), times), (setup, [direct, mirrored]))| {
+        .map(|(((name, _, _), times), (setup, [direct, mirrored]))| {
             times.sort();
             let median = ms(times[times.len() / 2]);
             println!(
@@ -183,6 +207,23 @@ fn breakdown(gpu: &Gpu, world: &World, config: &SceneConfig) {
                 median / reference
             );
         }
+    }
+}
+
+/// What leaving the hidden mirrored chunks out saves in the course look on `world`, in the same
+/// interleaved rounds as drawing them all.
+fn culling(gpu: &Gpu, world: &World, config: &SceneConfig, scene: &str) {
+    let variants = [
+        ("course, culled reflection", Settings::course(), true),
+        ("course, whole reflection", Settings::course(), false),
+    ];
+    let medians = measure_variants(gpu, world, config, &format!("  {scene}"), &variants);
+    if let [(_, culled), (_, whole)] = medians[..] {
+        println!(
+            "  culling the hidden reflection: {:+.1} ms ({culled:.1} / {whole:.1} = {:.2})",
+            culled - whole,
+            culled / whole
+        );
     }
 }
 

@@ -107,7 +107,18 @@ impl Renderer {
         if let Some(land) =
             self.course.as_mut().filter(|_| self.settings.look == Look::Course).and_then(|c| c.mesh())
         {
-            let lod = |mirrored| LodView { eye, frustum, pixels_per_unit, max_error_pixels, mirrored };
+            // The near plane's corners are the furthest points it clips away.
+            let half_height = (view.field_of_view_degrees.to_radians() / 2.0).tan();
+            let near_reach = config.near * (1.0 + half_height * half_height * (1.0 + aspect * aspect)).sqrt();
+            let lod = |mirrored| LodView {
+                eye,
+                frustum,
+                view_projection,
+                pixels_per_unit,
+                max_error_pixels,
+                mirrored,
+                near_reach,
+            };
             land.prepare(&gpu.queue, [&lod(false), &lod(true)]);
             stats.terrain_triangles = land.triangles_chosen();
         } else if let Some(grid) = &mut self.grid {

@@ -75,6 +75,8 @@ pub struct LandPass {
     multi_draw: bool,
     /// The chunks chosen for the direct (0) and mirrored (1) pass of the current frame.
     chosen: [Vec<DrawRange>; 2],
+    /// Whether the mirrored pass leaves out the chunks the land hides (on unless measuring).
+    cull_hidden_reflection: bool,
 }
 
 impl LandPass {
@@ -170,17 +172,22 @@ impl LandPass {
             indices,
             bind_group,
             // Keep the chunk table only: the geometry now lives on the GPU.
-            chunks: TerrainMesh { positions: Vec::new(), indices: Vec::new(), chunks: mesh.chunks },
+            chunks: TerrainMesh { positions: Vec::new(), indices: Vec::new(), ..mesh },
             indirect,
             multi_draw,
             chosen: [Vec::new(), Vec::new()],
+            cull_hidden_reflection: true,
         })
     }
 
     /// Chooses the chunks and levels of the direct and mirrored passes and uploads their draws.
-    pub fn prepare(&mut self, queue: &wgpu::Queue, views: [&LodView; 2]) {
-        for (slot, view) in views.into_iter().enumerate() {
-            self.chosen[slot] = self.chunks.select(view);
+    pub fn prepare(&mut self, queue: &wgpu::Queue, [direct, mirrored]: [&LodView; 2]) {
+        self.chosen = if self.cull_hidden_reflection {
+            self.chunks.select_pair(direct, mirrored)
+        } else {
+            [self.chunks.select(direct), self.chunks.select(mirrored)]
+        };
+        for slot in 0..2 {
             let args: Vec<wgpu::util::DrawIndexedIndirectArgs> = self.chosen[slot]
                 .iter()
                 .map(|range| wgpu::util::DrawIndexedIndirectArgs {
@@ -239,6 +246,12 @@ impl LandPass {
             self.wireframe = Some(land_pipelines(context, &self.layout, wgpu::PolygonMode::Line));
         }
         self.show_wireframe = on;
+    }
+
+    /// Leaves out of the mirrored pass the chunks the land hides (`on`, the default) or draws
+    /// them all, to measure what leaving them out saves; the picture is the same either way.
+    pub fn set_cull_hidden_reflection(&mut self, on: bool) {
+        self.cull_hidden_reflection = on;
     }
 
     /// GPU memory of the mesh and of its textures, in bytes.

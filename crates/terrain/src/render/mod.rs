@@ -236,6 +236,15 @@ impl Renderer {
         Ok(())
     }
 
+    /// Leaves out of the course look's mirrored pass the land's chunks that the land itself hides
+    /// (`on`, the default), or draws them all, to measure what that saves: the picture is the
+    /// same bit for bit either way. Only the static mesh (maps up to [`MESH_MAX_SIDE`]) culls.
+    pub fn set_cull_hidden_reflection(&mut self, on: bool) {
+        if let Some(land) = self.course.as_mut().and_then(CourseLook::mesh) {
+            land.set_cull_hidden_reflection(on);
+        }
+    }
+
     /// The settings the renderer draws with.
     pub fn settings(&self) -> &Settings {
         &self.settings

@@ -18,6 +18,7 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 use super::Heightfield;
+use super::occlusion::{BlockFloors, BlockGrid, WaterOcclusion, block_floors};
 use crate::camera::Frustum;
 
 /// Cells along a side of a chunk (the last chunk of a row or column may be smaller).
@@ -45,6 +46,9 @@ pub struct ChunkLevel {
     /// Largest vertical distance, in world units, between this level's visible surface and the
     /// full-resolution one (never less than the finer levels').
     pub error: f32,
+    /// The lowest height of this level's surface over each block of the chunk
+    /// ([`super::occlusion::block_floors`]).
+    pub block_floors: BlockFloors,
 }
 
 impl ChunkLevel {
@@ -91,6 +95,8 @@ pub struct LodView {
     pub eye: Vec3,
     /// What the camera sees (of the mirrored world, when `mirrored`).
     pub frustum: Frustum,
+    /// The world-to-clip matrix the frustum is made of.
+    pub view_projection: glam::Mat4,
     /// Pixels covered by one world unit seen face-on at a distance of one unit:
     /// `viewport height / (2 tan(vertical field of view / 2))`.
     pub pixels_per_unit: f32,
@@ -98,6 +104,9 @@ pub struct LodView {
     pub max_error_pixels: f32,
     /// Whether this is the mirrored pass (chunks are tested mirrored in y = 0).
     pub mirrored: bool,
+    /// The largest distance from the eye, in world units, of a point in front of the camera that
+    /// the near plane clips away.
+    pub near_reach: f32,
 }
 
 /// The terrain above the water as indexed triangle lists, in chunks and levels of detail.
@@ -116,6 +125,8 @@ pub struct TerrainMesh {
     pub indices: Vec<u16>,
     /// The chunks, row by row from the far row. Chunks entirely under water have no indices.
     pub chunks: Vec<Chunk>,
+    /// Where the chunks' blocks lie, to tell which mirrored chunks the land hides.
+    pub grid: BlockGrid,
 }
 
 impl TerrainMesh {
@@ -137,6 +148,7 @@ impl TerrainMesh {
             positions: Vec::new(),
             indices: Vec::new(),
             chunks: Vec::with_capacity(errors.len()),
+            grid: BlockGrid::new(field, column_spans.len() as u32),
         };
         for (i, &rows) in row_spans.iter().enumerate() {
             for (j, &columns) in column_spans.iter().enumerate() {
@@ -199,6 +211,7 @@ impl TerrainMesh {
                 (0..=last_row).map(|i| block.positions[at(i, 0) as usize]).collect(),
                 (0..=last_row).map(|i| block.positions[at(i, last_column) as usize]).collect(),
             ];
+            let block_floors = block_floors(field, (rows, columns), &row_samples, &column_samples);
             let surface = self.push_block(block);
             let mut edge_index = 0;
             let skirts = edges.map(|edge| {
@@ -218,7 +231,7 @@ impl TerrainMesh {
                 let ordered = if facing_negative(&second) { [second, first] } else { [first, second] };
                 ordered.map(|strip| self.push_block(strip))
             });
-            levels.push(ChunkLevel { surface, skirts, error });
+            levels.push(ChunkLevel { surface, skirts, error, block_floors });
         }
         let heights =
             (rows.0..=rows.1).flat_map(|r| (columns.0..=columns.1).map(move |c| field.height(r, c)));
@@ -280,11 +293,37 @@ impl TerrainMesh {
     /// `view.max_error_pixels` on screen, as its surface and the skirt strips that face the camera
     /// (up to five ranges a chunk). Chunks out of view or under water are left out.
     pub fn select(&self, view: &LodView) -> Vec<DrawRange> {
-        let mut chosen: Vec<(f32, &Chunk, &ChunkLevel)> = self
+        self.ranges(view, &self.choose(view))
+    }
+
+    /// What the direct pass (`direct`) and the mirrored pass (`mirrored`) draw, as
+    /// [`Self::select`] chooses it for each, except the mirrored chunks that the land drawn by
+    /// the direct pass hides from the eye ([`WaterOcclusion`]): they would draw no pixel.
+    pub fn select_pair(&self, direct: &LodView, mirrored: &LodView) -> [Vec<DrawRange>; 2] {
+        let direct_chosen = self.choose(direct);
+        let mut mirrored_chosen = self.choose(mirrored);
+        let levels = direct_chosen.iter().map(|&(_, chunk, level)| (chunk, level));
+        if let Some(mut occlusion) = WaterOcclusion::new(
+            &self.grid,
+            &self.chunks,
+            levels,
+            (direct.eye, direct.view_projection),
+            direct.near_reach,
+        ) {
+            mirrored_chosen.retain(|&(_, chunk, _)| !occlusion.hides(&self.chunks[chunk]));
+        }
+        [self.ranges(direct, &direct_chosen), self.ranges(mirrored, &mirrored_chosen)]
+    }
+
+    /// The chunks in `view` (by index), nearest first, each with the level to draw it at, and
+    /// the key they are ordered by.
+    fn choose(&self, view: &LodView) -> Vec<(f32, usize, usize)> {
+        let mut chosen: Vec<(f32, usize, usize)> = self
             .chunks
             .iter()
-            .filter(|chunk| chunk.levels.first().is_some_and(|l| !l.is_empty()))
-            .filter_map(|chunk| {
+            .enumerate()
+            .filter(|(_, chunk)| chunk.levels.first().is_some_and(|l| !l.is_empty()))
+            .filter_map(|(index, chunk)| {
                 let (min, max) = if view.mirrored {
                     (
                         Vec3::new(chunk.min.x, -chunk.max.y, chunk.min.z),
@@ -298,17 +337,24 @@ impl TerrainMesh {
                 }
                 let distance = (view.eye.clamp(min, max) - view.eye).length().max(1e-3);
                 let allowed = view.max_error_pixels * distance / view.pixels_per_unit;
-                let level =
-                    chunk.levels.iter().rev().find(|l| l.error <= allowed).unwrap_or(&chunk.levels[0]);
+                let level = chunk.levels.iter().rposition(|l| l.error <= allowed).unwrap_or(0);
                 // Order by the distance to the box's centre: the eye may be inside several boxes,
                 // which are all at distance 0 from their surfaces.
                 let order = ((min + max) * 0.5 - view.eye).length_squared();
-                Some((order, chunk, level))
+                Some((order, index, level))
             })
             .collect();
         chosen.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chosen
+    }
+
+    /// The ranges drawing the `chosen` chunk levels for `view`: each surface and the skirt strips
+    /// facing the camera.
+    fn ranges(&self, view: &LodView, chosen: &[(f32, usize, usize)]) -> Vec<DrawRange> {
         let mut ranges = Vec::with_capacity(chosen.len() * (1 + EDGE_COUNT));
-        for (_, chunk, level) in chosen {
+        for &(_, index, level) in chosen {
+            let chunk = &self.chunks[index];
+            let level = &chunk.levels[level];
             ranges.push(level.surface);
             for (edge, strips) in level.skirts.iter().enumerate() {
                 // Rows are planes of constant z, columns of constant x. The mirror image keeps x
@@ -653,9 +699,11 @@ mod tests {
         LodView {
             eye: pose.position,
             frustum: crate::camera::Frustum::from_view_projection(view_projection),
+            view_projection,
             pixels_per_unit: 720.0 / (2.0 * (22.5f32).to_radians().tan()),
             max_error_pixels: 1.0,
             mirrored: mesh_mirrored,
+            near_reach: 0.2,
         }
     }
 

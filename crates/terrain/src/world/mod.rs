@@ -9,6 +9,7 @@ pub mod export;
 pub mod heightfield;
 pub mod heightmap;
 pub mod mesh;
+pub mod occlusion;
 pub mod procedural;
 pub mod quadtree;
 
