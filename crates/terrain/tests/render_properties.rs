@@ -6,7 +6,7 @@ mod common;
 
 use common::{gpu, marker_world, project, render, view_from};
 use image::{Rgba, RgbaImage};
-use terrain::headless::OffscreenTarget;
+use terrain::headless::{HeadlessRenderer, OffscreenTarget};
 use terrain::render::{Backend, Renderer};
 use terrain::{SceneConfig, Settings};
 
@@ -168,4 +168,39 @@ fn what_the_gpu_refuses_is_an_error_naming_it_not_a_panic() {
     assert!(gpu.check().is_ok());
     // Without a problem the result comes through.
     assert_eq!(gpu.scoped("nothing", || 7).expect("no error"), 7);
+}
+
+/// Leaving out the mirrored land that the land hides changes no pixel: the course look with the
+/// culling on and off, byte for byte, from views where it removes much (low over the island),
+/// little (high above) and where it must stay off (at the waterline, outside the map).
+#[test]
+fn culling_the_hidden_reflection_changes_no_pixel() {
+    let Some(gpu) = gpu(Backend::Vulkan) else {
+        return;
+    };
+    let world = common::default_island();
+    let config = SceneConfig::default();
+    let views = [
+        common::start_view(0.0),
+        common::view_from([0.0, 0.6, 9.0], 0.0, -2.0),
+        common::view_from([6.0, 1.2, 3.0], 70.0, -8.0),
+        common::view_from([-4.0, 9.0, 12.0], -20.0, -35.0),
+        common::view_from([2.0, 0.05, 11.0], 10.0, 3.0),
+        common::view_from([0.0, 2.5, 18.0], 180.0, -4.0),
+    ];
+    let mut renderer =
+        HeadlessRenderer::new(gpu, world, &config, &Settings::course(), 320, 180).expect("renderer");
+    let mut left_out = 0;
+    for view in &views {
+        renderer.renderer_mut().set_cull_hidden_reflection(true);
+        let culled = renderer.render(gpu, view).expect("renders");
+        let mirrored_culled = renderer.renderer().terrain_triangles()[1];
+        renderer.renderer_mut().set_cull_hidden_reflection(false);
+        let whole = renderer.render(gpu, view).expect("renders");
+        let mirrored_whole = renderer.renderer().terrain_triangles()[1];
+        assert!(culled == whole, "culling changed the picture from {:?}", view.pose);
+        left_out += mirrored_whole - mirrored_culled;
+    }
+    // And it did leave some out (else this test would prove nothing).
+    assert!(left_out > 1000, "the culling left out only {left_out} triangles");
 }
