@@ -235,6 +235,15 @@ pub struct ViewSettings {
     pub time_seconds: f64,
 }
 
+impl ViewSettings {
+    /// A fly camera (with the default motion) at the pose and field of view it keeps.
+    pub fn camera(&self) -> crate::camera::FlyCamera {
+        use crate::camera::{CameraPose, FlyCamera, MotionSettings};
+        let pose = CameraPose::new(self.position.into(), self.yaw_degrees, self.pitch_degrees);
+        FlyCamera::new(pose, self.field_of_view_degrees, MotionSettings::default())
+    }
+}
+
 /// Everything that sets how a frame looks, apart from the world and the camera.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use std::cell::Cell;
 
-use terrain::camera::{CameraPose, FlyCamera, MotionSettings};
+use terrain::camera::{FlyCamera, MotionSettings};
 use terrain::controls::{self, Action};
 use terrain::headless::OffscreenTarget;
 use terrain::overlay::Overlay;
@@ -301,15 +301,7 @@ impl PageApp {
     /// Applies settings the panel changed, and its Save and Load (to the browser's storage).
     fn follow_panel(&mut self, requests: PanelRequests) {
         if requests.save {
-            let pose = self.camera.pose();
-            let view = self.view();
-            self.settings.view = Some(ViewSettings {
-                position: pose.position.to_array(),
-                yaw_degrees: pose.yaw_degrees,
-                pitch_degrees: pose.pitch_degrees,
-                field_of_view_degrees: view.field_of_view_degrees,
-                time_seconds: view.time_seconds,
-            });
+            self.settings.view = Some(ViewSettings::from(&self.view()));
             let message = match page::store(SETTINGS_KEY, &self.settings.to_toml()) {
                 Ok(()) => "saved, with the camera, in this browser".to_string(),
                 Err(message) => message,
@@ -325,10 +317,7 @@ impl PageApp {
             match loaded {
                 Ok(settings) => {
                     if let Some(view) = &settings.view {
-                        let pose =
-                            CameraPose::new(view.position.into(), view.yaw_degrees, view.pitch_degrees);
-                        self.camera =
-                            FlyCamera::new(pose, view.field_of_view_degrees, MotionSettings::default());
+                        self.camera = view.camera();
                     }
                     self.settings = settings;
                     self.panel.set_message("loaded".into());

@@ -9,7 +9,7 @@ use super::reflection::ReflectionTarget;
 use super::texture::DepthBuffer;
 use super::uniforms::FrameUniforms;
 use crate::camera::{CameraPose, Frustum, Lens};
-use crate::settings::Look;
+use crate::settings::{Look, ViewSettings};
 use crate::world::mesh::LodView;
 use crate::world::quadtree::TreeView;
 
@@ -23,6 +23,19 @@ pub struct FrameView {
     pub field_of_view_degrees: f32,
     /// Seconds since the scene started.
     pub time_seconds: f64,
+}
+
+impl From<&FrameView> for ViewSettings {
+    /// The view's camera and time, as the settings file keeps them.
+    fn from(view: &FrameView) -> Self {
+        ViewSettings {
+            position: view.pose.position.to_array(),
+            yaw_degrees: view.pose.yaw_degrees,
+            pitch_degrees: view.pose.pitch_degrees,
+            field_of_view_degrees: view.field_of_view_degrees,
+            time_seconds: view.time_seconds,
+        }
+    }
 }
 
 impl FrameView {

@@ -318,15 +318,7 @@ impl App<'_> {
     /// Applies settings the panel changed, and its Save and Load.
     fn follow_panel(&mut self, requests: PanelRequests) {
         if requests.save {
-            let pose = self.camera.pose();
-            let view = self.view();
-            self.settings.view = Some(ViewSettings {
-                position: pose.position.to_array(),
-                yaw_degrees: pose.yaw_degrees,
-                pitch_degrees: pose.pitch_degrees,
-                field_of_view_degrees: view.field_of_view_degrees,
-                time_seconds: view.time_seconds,
-            });
+            self.settings.view = Some(ViewSettings::from(&self.view()));
             match self.settings.save(&self.options.settings_path) {
                 Ok(()) => {
                     self.panel.set_message(format!(
@@ -345,10 +337,7 @@ impl App<'_> {
             match Settings::load(&self.options.settings_path) {
                 Ok(settings) => {
                     if let Some(view) = &settings.view {
-                        let pose =
-                            CameraPose::new(view.position.into(), view.yaw_degrees, view.pitch_degrees);
-                        self.camera =
-                            FlyCamera::new(pose, view.field_of_view_degrees, MotionSettings::default());
+                        self.camera = view.camera();
                     }
                     self.settings = settings;
                     self.panel.set_message("loaded".into());
