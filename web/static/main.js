@@ -91,19 +91,18 @@ async function main() {
     build({ type: 'heightmap', name: file.name, bytes, seed: options.seed }, [bytes]);
   };
   $('file').addEventListener('change', (event) => load(event.target.files[0]));
+  // A heightmap dropped anywhere on the page.
   const hud = $('hud');
-  for (const target of [document.body]) {
-    target.addEventListener('dragover', (event) => {
-      event.preventDefault();
-      hud.classList.add('dropping');
-    });
-    target.addEventListener('dragleave', () => hud.classList.remove('dropping'));
-    target.addEventListener('drop', (event) => {
-      event.preventDefault();
-      hud.classList.remove('dropping');
-      load(event.dataTransfer.files[0]);
-    });
-  }
+  document.body.addEventListener('dragover', (event) => {
+    event.preventDefault();
+    hud.classList.add('dropping');
+  });
+  document.body.addEventListener('dragleave', () => hud.classList.remove('dropping'));
+  document.body.addEventListener('drop', (event) => {
+    event.preventDefault();
+    hud.classList.remove('dropping');
+    load(event.dataTransfer.files[0]);
+  });
 }
 
 main();
