@@ -90,13 +90,14 @@ fn push_sky_box(layers: &mut Vec<Layer>, prefix: &str, sky: SkyBox) {
 /// Puts a world back together from [`world_into_layers`]' layers (in any order).
 pub fn world_from_layers(layers: Vec<Layer>) -> Result<World, TransferError> {
     let mut pool = Pool(layers.into_iter().map(Some).collect());
-    let layer = pool.take("heightmap").ok_or_else(|| TransferError::Missing("heightmap".into()))?;
-    let heightmap = match &layer.data {
-        LayerData::Levels(levels) => Heightmap::new(layer.width, layer.height, levels.clone()),
-        LayerData::Sixteen(values) => Heightmap::from_sixteen_bit(layer.width, layer.height, values.clone()),
-        LayerData::Rgba(_) => return Err(malformed(&layer, "heightmap")),
+    let Layer { name, width, height, data } =
+        pool.take("heightmap").ok_or_else(|| TransferError::Missing("heightmap".into()))?;
+    let heightmap = match data {
+        LayerData::Levels(levels) => Heightmap::new(width, height, levels),
+        LayerData::Sixteen(values) => Heightmap::from_sixteen_bit(width, height, values),
+        LayerData::Rgba(_) => return Err(malformed(&name, width, height, "heightmap")),
     }
-    .map_err(|_| malformed(&layer, "heightmap"))?;
+    .map_err(|_| malformed(&name, width, height, "heightmap"))?;
     let colour_map = pool.required("colour")?;
     let detail_map = pool.required("detail")?;
     let water = pool.required("water")?;
@@ -108,8 +109,8 @@ pub fn world_from_layers(layers: Vec<Layer>) -> Result<World, TransferError> {
     Ok(World { heightmap, colour_map, detail_map, sky, water, unlit })
 }
 
-fn malformed(layer: &Layer, expected: &'static str) -> TransferError {
-    TransferError::Malformed { name: layer.name.clone(), width: layer.width, height: layer.height, expected }
+fn malformed(name: &str, width: u32, height: u32, expected: &'static str) -> TransferError {
+    TransferError::Malformed { name: name.into(), width, height, expected }
 }
 
 /// The layers not taken yet.
@@ -122,15 +123,13 @@ impl Pool {
 
     fn image(&mut self, name: &str) -> Result<Option<RgbaImage>, TransferError> {
         let Some(layer) = self.take(name) else { return Ok(None) };
-        let Layer { width, height, data: LayerData::Rgba(bytes), .. } = layer else {
-            return Err(malformed(&layer, "RGBA image"));
-        };
-        let expected = u64::from(width) * u64::from(height) * 4;
-        if bytes.len() as u64 != expected {
-            let layer = Layer { name: name.into(), width, height, data: LayerData::Rgba(Vec::new()) };
-            return Err(malformed(&layer, "RGBA image"));
+        let Layer { width, height, data, .. } = layer;
+        match data {
+            LayerData::Rgba(bytes) if bytes.len() as u64 == u64::from(width) * u64::from(height) * 4 => {
+                Ok(RgbaImage::from_raw(width, height, bytes))
+            }
+            _ => Err(malformed(name, width, height, "RGBA image")),
         }
-        Ok(RgbaImage::from_raw(width, height, bytes))
     }
 
     fn required(&mut self, name: &str) -> Result<RgbaImage, TransferError> {
