@@ -13,8 +13,10 @@ ratio, and how well the hit distances agree. Run it from the repository root:
     target/embree-venv/bin/python tools/embree/bench.py
 
 Both sides time only the casting (not loading or building), as the CPU time of the casting
-thread (which other work on a shared machine disturbs far less than the wall clock), best of
---runs runs.
+thread (which other work on a shared machine disturbs far less than the wall clock). They take
+turns: each of --rounds rounds casts each set --runs times at Embree, then --runs times at
+rayterra (in one process, so both cast with warm caches); the best cast of each counts, so a
+busy moment of the machine slows both sides alike or neither.
 """
 
 import argparse
@@ -60,6 +62,7 @@ def incoherent_rays(lo, hi, n, seed=1):
 
 
 def embree_cast(scene, o, d, runs):
+    """Casts the rays `runs` times at Embree: (hit distances, best CPU seconds)."""
     best, dist = float("inf"), None
     for _ in range(runs):
         start = time.thread_time()
@@ -69,15 +72,13 @@ def embree_cast(scene, o, d, runs):
 
 
 def rayterra_cast(binary, mesh, o, d, runs, tmp):
+    """Casts the rays `runs` times at rayterra's BVH: (hit distances, best CPU seconds)."""
     rays = os.path.join(tmp, "rays.bin")
     out = os.path.join(tmp, "hits.bin")
     np.concatenate([o, d], axis=1).astype("<f4").tofile(rays)
-    best = float("inf")
-    for _ in range(runs):
-        text = subprocess.run([binary, "--mesh", mesh, "--rays", rays, "--out", out],
-                              check=True, capture_output=True, text=True).stdout
-        best = min(best, float(re.search(r"seconds ([0-9.eE+-]+)", text).group(1)))
-    return np.fromfile(out, dtype="<f4"), best
+    text = subprocess.run([binary, "--mesh", mesh, "--rays", rays, "--out", out, "--runs", str(runs)],
+                          check=True, capture_output=True, text=True).stdout
+    return np.fromfile(out, dtype="<f4"), float(re.search(r"seconds ([0-9.eE+-]+)", text).group(1))
 
 
 def bench_binary():
@@ -96,7 +97,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mesh", default=os.path.join(ROOT, "../shared/course-assets/meshes/bunny.obj"))
     parser.add_argument("--rays", type=int, default=1_000_000, help="rays per set (default 1,000,000)")
-    parser.add_argument("--runs", type=int, default=3, help="runs per measurement; the best counts")
+    parser.add_argument("--runs", type=int, default=3, help="casts of each set per side and round")
+    parser.add_argument("--rounds", type=int, default=3, help="rounds of turns; the best cast counts")
     args = parser.parse_args()
     if not os.path.isfile(args.mesh):
         sys.exit(f"the mesh {args.mesh} is missing (the course assets belong in ../shared beside the repository)")
@@ -109,12 +111,17 @@ def main():
     TriangleMesh(scene, vertices[faces])
     lo, hi = vertices.min(axis=0).astype(np.float64), vertices.max(axis=0).astype(np.float64)
     n = int(round(args.rays ** 0.5))
-    print(f"{args.mesh}: {len(faces)} triangles; one thread, closest hit, best of {args.runs} runs")
+    print(f"{args.mesh}: {len(faces)} triangles; one thread, closest hit, "
+          f"best of {args.rounds} x {args.runs} casts each, taking turns")
     print(f"{'rays':<12}{'Embree':>14}{'rayterra':>14}{'rayterra/Embree':>18}   agreement")
     with tempfile.TemporaryDirectory() as tmp:
         for name, (o, d) in [("primary", primary_rays(lo, hi, n)), ("incoherent", incoherent_rays(lo, hi, args.rays))]:
-            e, te = embree_cast(scene, o, d, args.runs)
-            r, tr = rayterra_cast(binary, args.mesh, o, d, args.runs, tmp)
+            te = tr = float("inf")
+            for _ in range(args.rounds):
+                e, t = embree_cast(scene, o, d, args.runs)
+                te = min(te, t)
+                r, t = rayterra_cast(binary, args.mesh, o, d, args.runs, tmp)
+                tr = min(tr, t)
             e = np.where(e >= 1e30, np.inf, e)
             both = np.isfinite(e) & np.isfinite(r)
             differ = np.isfinite(e) != np.isfinite(r)

@@ -1,4 +1,4 @@
-//! Acceleration structures: a 4-wide bounding-volume hierarchy over the scene's primitives and,
+//! Acceleration structures: an 8-wide bounding-volume hierarchy over the scene's primitives and,
 //! inside every triangle mesh, over its triangles.
 
 pub mod wide;
