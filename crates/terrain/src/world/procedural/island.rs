@@ -150,14 +150,16 @@ fn island_with_exact_side(
     let detail = Fbm::<Perlin>::new(layer_seed(seed, 7)).set_octaves(octaves.max(1));
     let to_coarse = exact_side as f64 / size as f64;
     let step = 2.0 / size as f64;
+    // Where each column and each row of samples reads the coarse grid: at the sample's centre in
+    // the coarse grid's sample coordinates.
+    let taps: Vec<Taps> = (0..size).map(|i| shape.taps((i as f64 + 0.5) * to_coarse - 0.5)).collect();
     let values = grid_from_fn_with_progress(
         size,
         size,
         |x, y| {
-            // This sample's centre in the coarse grid's sample coordinates, and in [-1, 1]^2.
-            let (cx, cy) = ((x as f64 + 0.5) * to_coarse - 0.5, (y as f64 + 0.5) * to_coarse - 0.5);
+            // This sample's centre in [-1, 1]^2.
             let (px, pz) = ((x as f64 + 0.5) * step - 1.0, (y as f64 + 0.5) * step - 1.0);
-            let height = shape.bicubic(cx, cy);
+            let height = shape.interpolate(&taps[x as usize], &taps[y as usize]);
             let roughness =
                 smoothstep(0.08, 0.3, height.abs()) * (0.012 + 0.04 * smoothstep(0.4, 1.6, height));
             let height = height + roughness * detail.get([px * DETAIL_FREQUENCY, pz * DETAIL_FREQUENCY]);
@@ -180,33 +182,46 @@ struct Grid {
 }
 
 impl Grid {
-    /// Catmull-Rom bicubic interpolation at sample coordinates (`x`, `y`) (sample centres at whole
-    /// numbers), the grid's border extended outward.
-    fn bicubic(&self, x: f64, y: f64) -> f64 {
+    /// The four samples along one axis that interpolation at coordinate `t` reads (clamped to the
+    /// grid) and their Catmull-Rom weights: the same for a whole row or column of a resampling,
+    /// so worked out once for it.
+    fn taps(&self, t: f64) -> Taps {
         let last = self.side as isize - 1;
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let at = |i: isize, j: isize| {
-            self.heights[(j.clamp(0, last) as usize) * self.side + i.clamp(0, last) as usize]
-        };
-        let weights = |t: f64| {
-            let (t2, t3) = (t * t, t * t * t);
-            [
-                -0.5 * t3 + t2 - 0.5 * t,
-                1.5 * t3 - 2.5 * t2 + 1.0,
-                -1.5 * t3 + 2.0 * t2 + 0.5 * t,
-                0.5 * t3 - 0.5 * t2,
-            ]
-        };
-        let (wx, wy) = (weights(fx), weights(fy));
-        let (x0, y0) = (x0 as isize, y0 as isize);
+        let t0 = t.floor();
+        let f = t - t0;
+        let first = t0 as isize - 1;
+        let (f2, f3) = (f * f, f * f * f);
+        Taps {
+            samples: [0, 1, 2, 3].map(|i| (first + i).clamp(0, last) as usize),
+            weights: [
+                -0.5 * f3 + f2 - 0.5 * f,
+                1.5 * f3 - 2.5 * f2 + 1.0,
+                -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+                0.5 * f3 - 0.5 * f2,
+            ],
+        }
+    }
+
+    /// Catmull-Rom bicubic interpolation between the samples of `columns` x `rows` (the taps of
+    /// sample coordinates x and y, sample centres at whole numbers), the grid's border extended
+    /// outward.
+    fn interpolate(&self, columns: &Taps, rows: &Taps) -> f64 {
         (0..4)
             .map(|j| {
-                let row: f64 = (0..4).map(|i| wx[i] * at(x0 - 1 + i as isize, y0 - 1 + j as isize)).sum();
-                wy[j] * row
+                let line = &self.heights[rows.samples[j] * self.side..][..self.side];
+                let row: f64 = (0..4).map(|i| columns.weights[i] * line[columns.samples[i]]).sum();
+                rows.weights[j] * row
             })
             .sum()
     }
+}
+
+/// Where a bicubic interpolation reads along one axis ([`Grid::taps`]).
+struct Taps {
+    /// The four samples' indices along the axis, clamped to the grid.
+    samples: [usize; 4],
+    /// Their weights.
+    weights: [f64; 4],
 }
 
 /// The factor of the mountains that makes, whatever the seed, the highest peaks (all but the top
@@ -223,12 +238,10 @@ impl Grid {
 fn mountain_scale(elevations: &[(f64, f64)]) -> f64 {
     let rank = ((elevations.len() as f64 * PEAK_QUANTILE) as usize).min(elevations.len() - 1);
     let mut heights: Vec<f64> = elevations.iter().map(|&(base, mountain)| base + mountain).collect();
-    heights.sort_by(f64::total_cmp);
-    let (base_at_top, mountain_at_top) = elevations
-        .iter()
-        .copied()
-        .find(|&(base, mountain)| base + mountain == heights[rank])
-        .unwrap_or((0.0, 1.0));
+    // The height at that rank, as sorting them all would place it.
+    let at_rank = *heights.select_nth_unstable_by(rank, f64::total_cmp).1;
+    let (base_at_top, mountain_at_top) =
+        elevations.iter().copied().find(|&(base, mountain)| base + mountain == at_rank).unwrap_or((0.0, 1.0));
     let estimate = ((PEAK_HEIGHT - base_at_top) / mountain_at_top.max(1e-3)).clamp(0.0, 10.0);
     let quantile = |scale: f64| {
         let mut scaled: Vec<f64> =
@@ -360,6 +373,26 @@ mod tests {
                 "seed {seed}: no snowy peaks"
             );
         }
+    }
+
+    #[test]
+    fn bicubic_interpolation_meets_the_samples_and_follows_ramps() {
+        // 6 x 6 samples on a tilted plane: 3 per column, 5 per row, plus 1.
+        let side = 6;
+        let heights =
+            (0..side * side).map(|i| 1.0 + 3.0 * (i % side) as f64 + 5.0 * (i / side) as f64).collect();
+        let grid = Grid { side, heights };
+        let at = |x: f64, y: f64| grid.interpolate(&grid.taps(x), &grid.taps(y));
+        for (x, y) in [(0.0, 0.0), (2.0, 3.0), (5.0, 1.0)] {
+            assert_eq!(at(x, y), 1.0 + 3.0 * x + 5.0 * y);
+        }
+        // Catmull-Rom reproduces a plane between samples, away from the border.
+        for (x, y) in [(1.25, 2.5), (3.75, 1.5), (2.5, 3.125)] {
+            assert!((at(x, y) - (1.0 + 3.0 * x + 5.0 * y)).abs() < 1e-12, "({x}, {y})");
+        }
+        // Beyond the border the border's samples are read.
+        assert_eq!(at(-3.0, -3.0), 1.0);
+        assert_eq!(at(9.0, 0.0), 16.0);
     }
 
     #[test]
