@@ -52,9 +52,9 @@ const EMPTY: u32 = u32::MAX;
 #[derive(Clone, Debug)]
 #[repr(C, align(32))]
 pub struct Node {
-    /// Rows 0..3: lower bounds per axis (x, y, z), one lane per child; rows 3..6: upper bounds.
-    /// Unused lanes hold an empty box.
-    bounds: [[f32; WIDTH]; 6],
+    /// `bounds[0][axis]`: the lower bounds on that axis (x, y, z), one lane per child;
+    /// `bounds[1][axis]`: the upper bounds. Unused lanes hold an empty box.
+    bounds: [[[f32; WIDTH]; 3]; 2],
     /// Per child: a node index, a leaf (`LEAF | (count - 1) << 28 | first`), or [`EMPTY`].
     child: [u32; WIDTH],
 }
@@ -168,10 +168,10 @@ pub struct BoxRay {
     pub inv_dir: [f32; 3],
     /// `inv_dir` widened by a few ulps (see [`FAR_SCALE`]), for the far distance of slab tests.
     pub inv_dir_far: [f32; 3],
-    /// Per axis, the row of [`Node::bounds`] with the faces the ray enters by (the lower bounds,
-    /// or the upper ones where the direction is negative) and the row it leaves by: chosen by
-    /// index rather than by a branch, which incoherent rays would mispredict.
-    pub rows: [(usize, usize); 3],
+    /// Whether each direction component is negative: the ray then enters a box by its upper
+    /// face on that axis. The faces are picked by indexing with it rather than by a branch,
+    /// which incoherent rays would mispredict.
+    pub negative: [bool; 3],
 }
 
 impl BoxRay {
@@ -196,7 +196,7 @@ impl BoxRay {
             origin,
             inv_dir,
             inv_dir_far: inv_dir.map(|i| i * FAR_SCALE),
-            rows: [0, 1, 2].map(|a| if inv_dir[a] < 0.0 { (a + 3, a) } else { (a, a + 3) }),
+            negative: [inv_dir[0] < 0.0, inv_dir[1] < 0.0, inv_dir[2] < 0.0],
         }
     }
 }
@@ -212,7 +212,8 @@ fn node_distances(node: &Node, ray: &BoxRay, t_max: f32) -> (Lanes, u32) {
     let mut near = Lanes::ZERO;
     let mut far = Lanes::from(t_max);
     for axis in 0..3 {
-        let (n, f) = (node.bounds[ray.rows[axis].0], node.bounds[ray.rows[axis].1]);
+        let negative = ray.negative[axis];
+        let (n, f) = (node.bounds[negative as usize][axis], node.bounds[!negative as usize][axis]);
         let o = Lanes::from(ray.origin[axis]);
         let tn = (Lanes::from(n) - o) * Lanes::from(ray.inv_dir[axis]);
         let tf = (Lanes::from(f) - o) * Lanes::from(ray.inv_dir_far[axis]);
@@ -488,14 +489,7 @@ fn build_subtree(
     }
     let node_index = nodes.len();
     nodes.push(Node {
-        bounds: [
-            [f32::INFINITY; WIDTH],
-            [f32::INFINITY; WIDTH],
-            [f32::INFINITY; WIDTH],
-            [f32::NEG_INFINITY; WIDTH],
-            [f32::NEG_INFINITY; WIDTH],
-            [f32::NEG_INFINITY; WIDTH],
-        ],
+        bounds: [[[f32::INFINITY; WIDTH]; 3], [[f32::NEG_INFINITY; WIDTH]; 3]],
         child: [EMPTY; WIDTH],
     });
     // Build the children; big ones in parallel (each into its own node list, appended after).
@@ -541,8 +535,8 @@ fn build_subtree(
     let node = &mut nodes[node_index];
     for (lane, c) in children.iter().enumerate() {
         for axis in 0..3 {
-            node.bounds[axis][lane] = c.bounds.lo[axis];
-            node.bounds[axis + 3][lane] = c.bounds.hi[axis];
+            node.bounds[0][axis][lane] = c.bounds.lo[axis];
+            node.bounds[1][axis][lane] = c.bounds.hi[axis];
         }
         node.child[lane] = c.reference;
     }
