@@ -166,8 +166,7 @@ fn packet_hit(p: &Packet, r: &MeshRay, t_max: f32) -> Option<(usize, f32, f32, f
     let w = x1 * y0 - y1 * x0;
     let zero = f32x4::ZERO;
     let on_edge = u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero);
-    let mixed = (u.simd_lt(zero) | v.simd_lt(zero) | w.simd_lt(zero))
-        & (u.simd_gt(zero) | v.simd_gt(zero) | w.simd_gt(zero));
+    let mixed = u.fast_min(v).fast_min(w).simd_lt(zero) & u.fast_max(v).fast_max(w).simd_gt(zero);
     let det = u + v + w;
     let t_scaled = u * z0 + v * z1 + w * z2;
     // 0 < t_scaled / det <= t_max, with det's sign taken off both (negation is exact); NaN (the
