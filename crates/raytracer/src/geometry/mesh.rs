@@ -147,7 +147,7 @@ fn shear(dir: [f32; 3], [kx, ky, kz]: [usize; 3]) -> [f32; 3] {
 /// same order as the per-lane test, so the same numbers): a lane stays a candidate if its edge
 /// functions agree in sign and its distance lies in `(0, t_max]`, or if one of them is exactly 0
 /// (an edge in single precision, decided again in double precision). Most packets a ray reaches
-/// have no candidate; the few that do are decided lane by lane, nearest first.
+/// have no candidate; the few that do are decided lane by lane.
 #[inline(always)]
 fn packet_hit(p: &Packet, r: &MeshRay, t_max: f32) -> Option<(usize, f32, f32, f32)> {
     let [kx, ky, kz] = r.k;
@@ -313,7 +313,7 @@ impl TriangleMesh {
     /// Bytes of the triangles' indices, packets and BVH (not the shared vertex data).
     pub fn memory(&self) -> usize {
         (self.positions.len() + self.normals.len() + self.uvs.len()) * 12
-            + self.packets.len() * (std::mem::size_of::<Packet>() + 16)
+            + self.packets.len() * (std::mem::size_of::<Packet>() + std::mem::size_of::<[u32; 4]>())
             + self.bvh.memory()
     }
 
