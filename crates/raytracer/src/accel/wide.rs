@@ -206,18 +206,38 @@ impl BoxRay {
 /// arithmetic is never missed through rounding (pbrt's `1 + 2 gamma(3)`).
 const FAR_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
+/// A [`BoxRay`] with its numbers repeated in every lane, made once per traversal rather than at
+/// every node.
+struct RayLanes {
+    origin: [Lanes; 3],
+    inv_dir: [Lanes; 3],
+    inv_dir_far: [Lanes; 3],
+    negative: [bool; 3],
+}
+
+impl RayLanes {
+    #[inline(always)]
+    fn new(ray: &BoxRay) -> RayLanes {
+        RayLanes {
+            origin: ray.origin.map(Lanes::from),
+            inv_dir: ray.inv_dir.map(Lanes::from),
+            inv_dir_far: ray.inv_dir_far.map(Lanes::from),
+            negative: ray.negative,
+        }
+    }
+}
+
 /// The entry distance of the ray into each of the node's eight boxes, and a mask of the boxes the
 /// ray meets within `[0, t_max]` (bit `i` for child `i`).
 #[inline(always)]
-fn node_distances(node: &Node, ray: &BoxRay, t_max: f32) -> (Lanes, u32) {
+fn node_distances(node: &Node, ray: &RayLanes, t_max: f32) -> (Lanes, u32) {
     let mut near = Lanes::ZERO;
     let mut far = Lanes::from(t_max);
     for axis in 0..3 {
         let negative = ray.negative[axis];
         let (n, f) = (node.bounds[negative as usize][axis], node.bounds[!negative as usize][axis]);
-        let o = Lanes::from(ray.origin[axis]);
-        let tn = (Lanes::from(n) - o) * Lanes::from(ray.inv_dir[axis]);
-        let tf = (Lanes::from(f) - o) * Lanes::from(ray.inv_dir_far[axis]);
+        let tn = (Lanes::from(n) - ray.origin[axis]) * ray.inv_dir[axis];
+        let tf = (Lanes::from(f) - ray.origin[axis]) * ray.inv_dir_far[axis];
         // `tn > near ? tn : near` and `tf < far ? tf : far`: a NaN keeps the running bound.
         near = tn.fast_max(near);
         far = tf.fast_min(far);
@@ -367,6 +387,7 @@ impl WideBvh {
         if self.root == EMPTY {
             return;
         }
+        let lanes = RayLanes::new(ray);
         let mut stack = Stack::new();
         let mut current = self.root;
         loop {
@@ -378,7 +399,7 @@ impl WideBvh {
                 }
             } else {
                 let node = &self.nodes[current as usize];
-                let (near, mut mask) = node_distances(node, ray, t_max);
+                let (near, mut mask) = node_distances(node, &lanes, t_max);
                 let dist = near.to_array();
                 // The common cases first: one child hit, or two.
                 if mask != 0 {

@@ -105,9 +105,13 @@ impl PartialEq for TriangleMesh {
 pub struct MeshRay {
     /// The ray for box tests.
     pub boxes: BoxRay,
+    /// The axis permutation of the watertight test.
     k: [usize; 3],
-    shear: [f32; 3],
-    origin: [f32; 3],
+    /// Its shear `[d_kx / d_kz, d_ky / d_kz, 1 / d_kz]`, in every lane.
+    shear: [f32x4; 3],
+    /// The origin's coordinates in the permuted order, in every lane (made once per ray rather
+    /// than in every packet test).
+    origin: [f32x4; 3],
 }
 
 impl MeshRay {
@@ -127,8 +131,8 @@ impl MeshRay {
         MeshRay {
             boxes: BoxRay::from_f32(origin, dir),
             k: [kx, ky, kz],
-            shear: shear(dir, [kx, ky, kz]),
-            origin,
+            shear: shear(dir, [kx, ky, kz]).map(f32x4::from),
+            origin: [origin[kx], origin[ky], origin[kz]].map(f32x4::from),
         }
     }
 }
@@ -151,8 +155,8 @@ fn shear(dir: [f32; 3], [kx, ky, kz]: [usize; 3]) -> [f32; 3] {
 #[inline(always)]
 fn packet_hit(p: &Packet, r: &MeshRay, t_max: f32) -> Option<(usize, f32, f32, f32)> {
     let [kx, ky, kz] = r.k;
-    let [sx, sy, sz] = r.shear.map(f32x4::from);
-    let (ox, oy, oz) = (f32x4::from(r.origin[kx]), f32x4::from(r.origin[ky]), f32x4::from(r.origin[kz]));
+    let [sx, sy, sz] = r.shear;
+    let [ox, oy, oz] = r.origin;
     // Corners relative to the origin, sheared: x' = x - sx z, y' = y - sy z.
     let corner = |c: usize| {
         let cz = f32x4::from(p.v[c][kz]) - oz;
