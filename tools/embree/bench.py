@@ -71,11 +71,18 @@ def embree_cast(scene, o, d, runs):
     return np.asarray(dist, dtype=np.float32), best
 
 
-def rayterra_cast(binary, mesh, o, d, runs, tmp):
-    """Casts the rays `runs` times at rayterra's BVH: (hit distances, best CPU seconds)."""
+def write_rays(o, d, tmp):
+    """Writes the rays for the benchmark binary (little-endian f32: origin, direction); returns
+    the file's path."""
     rays = os.path.join(tmp, "rays.bin")
-    out = os.path.join(tmp, "hits.bin")
     np.concatenate([o, d], axis=1).astype("<f4").tofile(rays)
+    return rays
+
+
+def rayterra_cast(binary, mesh, rays, runs, tmp):
+    """Casts the rays of the file `rays` `runs` times at rayterra's BVH: (hit distances, best CPU
+    seconds)."""
+    out = os.path.join(tmp, "hits.bin")
     text = subprocess.run([binary, "--mesh", mesh, "--rays", rays, "--out", out, "--runs", str(runs)],
                           check=True, capture_output=True, text=True).stdout
     return np.fromfile(out, dtype="<f4"), float(re.search(r"seconds ([0-9.eE+-]+)", text).group(1))
@@ -116,11 +123,12 @@ def main():
     print(f"{'rays':<12}{'Embree':>14}{'rayterra':>14}{'rayterra/Embree':>18}   agreement")
     with tempfile.TemporaryDirectory() as tmp:
         for name, (o, d) in [("primary", primary_rays(lo, hi, n)), ("incoherent", incoherent_rays(lo, hi, args.rays))]:
+            rays = write_rays(o, d, tmp)
             te = tr = float("inf")
             for _ in range(args.rounds):
                 e, t = embree_cast(scene, o, d, args.runs)
                 te = min(te, t)
-                r, t = rayterra_cast(binary, args.mesh, o, d, args.runs, tmp)
+                r, t = rayterra_cast(binary, args.mesh, rays, args.runs, tmp)
                 tr = min(tr, t)
             e = np.where(e >= 1e30, np.inf, e)
             both = np.isfinite(e) & np.isfinite(r)
