@@ -14,9 +14,11 @@ ratio, and how well the hit distances agree. Run it from the repository root:
 
 Both sides time only the casting (not loading or building), as the CPU time of the casting
 thread (which other work on a shared machine disturbs far less than the wall clock). They take
-turns: each of --rounds rounds casts each set --runs times at Embree, then --runs times at
-rayterra (in one process, so both cast with warm caches); the best cast of each counts, so a
-busy moment of the machine slows both sides alike or neither.
+turns cast by cast: each of --rounds rounds casts the set once at Embree, then once at rayterra
+(whose process stays up between rounds, so both cast with warm caches), after one cast of each
+to warm up. The speed of this shared machine drifts by tens of percent over seconds, so the
+script prints the best cast of each side and the median and range of the rounds' ratios (each
+round's two casts run within a fraction of a second of each other).
 """
 
 import argparse
@@ -61,14 +63,11 @@ def incoherent_rays(lo, hi, n, seed=1):
     return o.astype(np.float32), d.astype(np.float32)
 
 
-def embree_cast(scene, o, d, runs):
-    """Casts the rays `runs` times at Embree: (hit distances, best CPU seconds)."""
-    best, dist = float("inf"), None
-    for _ in range(runs):
-        start = time.thread_time()
-        dist = scene.run(o, d, query="DISTANCE")
-        best = min(best, time.thread_time() - start)
-    return np.asarray(dist, dtype=np.float32), best
+def embree_cast(scene, o, d):
+    """Casts the rays once at Embree: (hit distances, CPU seconds)."""
+    start = time.thread_time()
+    dist = scene.run(o, d, query="DISTANCE")
+    return np.asarray(dist, dtype=np.float32), time.thread_time() - start
 
 
 def write_rays(o, d, tmp):
@@ -79,13 +78,31 @@ def write_rays(o, d, tmp):
     return rays
 
 
-def rayterra_cast(binary, mesh, rays, runs, tmp):
-    """Casts the rays of the file `rays` `runs` times at rayterra's BVH: (hit distances, best CPU
-    seconds)."""
-    out = os.path.join(tmp, "hits.bin")
-    text = subprocess.run([binary, "--mesh", mesh, "--rays", rays, "--out", out, "--runs", str(runs)],
-                          check=True, capture_output=True, text=True).stdout
-    return np.fromfile(out, dtype="<f4"), float(re.search(r"seconds ([0-9.eE+-]+)", text).group(1))
+class Rayterra:
+    """The mesh_rays benchmark binary holding the mesh and the rays of the file `rays`; casts them
+    once per request."""
+
+    def __init__(self, binary, mesh, rays, tmp):
+        self.out = os.path.join(tmp, "hits.bin")
+        self.process = subprocess.Popen([binary, "--mesh", mesh, "--rays", rays, "--out", self.out],
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+
+    def cast(self):
+        """Casts the rays once: the CPU seconds."""
+        self.process.stdin.write("cast\n")
+        self.process.stdin.flush()
+        line = self.process.stdout.readline()
+        m = re.match(r"seconds ([0-9.eE+-]+)", line)
+        if not m:
+            sys.exit(f"unexpected answer from the benchmark binary: {line!r}")
+        return float(m.group(1))
+
+    def finish(self):
+        """Ends the process; the hit distances of the last cast."""
+        self.process.stdin.close()
+        if self.process.wait() != 0:
+            sys.exit("the benchmark binary failed")
+        return np.fromfile(self.out, dtype="<f4")
 
 
 def bench_binary():
@@ -104,8 +121,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mesh", default=os.path.join(ROOT, "../shared/course-assets/meshes/bunny.obj"))
     parser.add_argument("--rays", type=int, default=1_000_000, help="rays per set (default 1,000,000)")
-    parser.add_argument("--runs", type=int, default=3, help="casts of each set per side and round")
-    parser.add_argument("--rounds", type=int, default=3, help="rounds of turns; the best cast counts")
+    parser.add_argument("--rounds", type=int, default=15,
+                        help="rounds of turns, one cast of each side a round (default 15)")
     args = parser.parse_args()
     if not os.path.isfile(args.mesh):
         sys.exit(f"the mesh {args.mesh} is missing (the course assets belong in ../shared beside the repository)")
@@ -119,26 +136,30 @@ def main():
     lo, hi = vertices.min(axis=0).astype(np.float64), vertices.max(axis=0).astype(np.float64)
     n = int(round(args.rays ** 0.5))
     print(f"{args.mesh}: {len(faces)} triangles; one thread, closest hit, "
-          f"best of {args.rounds} x {args.runs} casts each, taking turns")
-    print(f"{'rays':<12}{'Embree':>14}{'rayterra':>14}{'rayterra/Embree':>18}   agreement")
+          f"{args.rounds} rounds of one cast each, taking turns")
+    print(f"{'rays':<12}{'Embree':>12}{'rayterra':>12}   rayterra/Embree: median (range)   agreement")
     with tempfile.TemporaryDirectory() as tmp:
         for name, (o, d) in [("primary", primary_rays(lo, hi, n)), ("incoherent", incoherent_rays(lo, hi, args.rays))]:
-            rays = write_rays(o, d, tmp)
-            te = tr = float("inf")
+            rayterra = Rayterra(binary, args.mesh, write_rays(o, d, tmp), tmp)
+            embree_cast(scene, o, d)
+            rayterra.cast()
+            te, tr, ratios = [], [], []
             for _ in range(args.rounds):
-                e, t = embree_cast(scene, o, d, args.runs)
-                te = min(te, t)
-                r, t = rayterra_cast(binary, args.mesh, rays, args.runs, tmp)
-                tr = min(tr, t)
+                e, t_e = embree_cast(scene, o, d)
+                t_r = rayterra.cast()
+                te.append(t_e)
+                tr.append(t_r)
+                ratios.append(t_e / t_r)
+            r = rayterra.finish()
             e = np.where(e >= 1e30, np.inf, e)
             both = np.isfinite(e) & np.isfinite(r)
             differ = np.isfinite(e) != np.isfinite(r)
             close = np.abs(e[both] - r[both]) <= 1e-4 * np.maximum(1, np.abs(e[both]))
-            rate_e, rate_r = len(o) / te / 1e6, len(o) / tr / 1e6
-            print(f"{name:<12}{rate_e:>9.2f} M/s{rate_r:>9.2f} M/s{rate_r / rate_e:>18.2f}   "
-                  f"{both.sum()} hit by both ({close.mean() * 100:.3f}% at the same distance), "
+            rate_e, rate_r = len(o) / min(te) / 1e6, len(o) / min(tr) / 1e6
+            print(f"{name:<12}{rate_e:>6.2f} M/s{rate_r:>8.2f} M/s   "
+                  f"{np.median(ratios):>6.2f} ({min(ratios):.2f}-{max(ratios):.2f})"
+                  f"{'':>17}{both.sum()} hit by both ({close.mean() * 100:.3f}% at the same distance), "
                   f"{differ.sum()} hit by one only")
-
 
 if __name__ == "__main__":
     main()
