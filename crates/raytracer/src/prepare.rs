@@ -229,27 +229,28 @@ impl PreparedScene {
             TextureSource::Builtin(_) => None,
         }));
 
-        let mut bounded: Vec<u32> = Vec::new();
-        let mut linear = Vec::new();
-        for (i, p) in scene.primitives.iter().enumerate() {
-            match p.shape.bounds() {
-                Some(_) => bounded.push(i as u32),
+        // Every primitive's box, in parallel; the unbounded ones (planes) are tested one by one.
+        let all_boxes: Vec<Option<Box32>> =
+            scene.primitives.par_iter().map(|p| p.shape.bounds().map(|b| Box32::from_bounds(&b))).collect();
+        let (mut bounded, mut linear) = (Vec::new(), Vec::new());
+        let mut boxes = Vec::with_capacity(all_boxes.len());
+        for (i, b) in all_boxes.into_iter().enumerate() {
+            match b {
+                Some(b) => {
+                    bounded.push(i as u32);
+                    boxes.push(b);
+                }
                 None => linear.push(i as u32),
             }
         }
         if bounded.len() <= FLAT_LIMIT {
             linear.append(&mut bounded);
             linear.sort_unstable();
+            boxes.clear();
         }
         let linear = FlatSet::new(&linear, &scene);
-        let boxes: Vec<Box32> = bounded
-            .par_iter()
-            .map(|&i| {
-                scene.primitives[i as usize].shape.bounds().map_or(Box32::EMPTY, |b| Box32::from_bounds(&b))
-            })
-            .collect();
         let bvh = WideBvh::build(&boxes, BuildParams::SHAPES);
-        let bvh_primitives = bvh.order().iter().map(|&k| bounded[k as usize]).collect();
+        let bvh_primitives = bvh.order().par_iter().map(|&k| bounded[k as usize]).collect();
         let emitters = scene
             .lights
             .iter()

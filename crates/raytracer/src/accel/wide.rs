@@ -296,24 +296,24 @@ impl WideBvh {
     /// non-finite box are left out. At most [`MAX_ITEMS`] items.
     pub fn build(boxes: &[Box32], params: BuildParams) -> WideBvh {
         assert!(boxes.len() <= MAX_ITEMS, "too many items for one BVH");
-        let mut items: Vec<BuildItem> = boxes
-            .iter()
-            .enumerate()
-            .filter(|(_, b)| {
-                (0..3).all(|a| b.lo[a] <= b.hi[a]) && !b.lo.iter().chain(&b.hi).any(|v| v.is_nan())
-            })
-            .map(|(i, b)| BuildItem { bounds: *b, centre: b.centre2(), index: i as u32 })
-            .collect();
+        use rayon::prelude::*;
+        let usable =
+            |b: &Box32| (0..3).all(|a| b.lo[a] <= b.hi[a]) && !b.lo.iter().chain(&b.hi).any(|v| v.is_nan());
+        let item = |(i, b): (usize, &Box32)| BuildItem { bounds: *b, centre: b.centre2(), index: i as u32 };
+        let mut items: Vec<BuildItem> = if boxes.len() >= PARALLEL_ITEMS {
+            boxes.par_iter().enumerate().filter(|(_, b)| usable(b)).map(item).collect()
+        } else {
+            boxes.iter().enumerate().filter(|(_, b)| usable(b)).map(item).collect()
+        };
         let mut bvh = WideBvh { nodes: Vec::new(), order: Vec::new(), root: EMPTY, bounds: None };
         if items.is_empty() {
             return bvh;
         }
         let params = BuildParams { max_leaf: params.max_leaf.clamp(1, MAX_LEAF), ..params };
         let mut nodes = Vec::with_capacity(items.len() / 3 + 1);
-        let bounds = items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds));
-        let group = Group { bounds, centroids: centroid_bounds(&items) };
+        let group = group_of(&items);
         let root = build_subtree(&mut items, 0, group, &mut nodes, params);
-        bvh.order = items.iter().map(|it| it.index).collect();
+        bvh.order = items.par_iter().map(|it| it.index).collect();
         bvh.nodes = nodes;
         bvh.root = root.reference;
         bvh.bounds = Some(root.bounds);
@@ -477,6 +477,14 @@ fn leaf_reference(first: u32, count: u32) -> u32 {
 struct Group {
     bounds: Box32,
     centroids: Box32,
+}
+
+impl Group {
+    const EMPTY: Group = Group { bounds: Box32::EMPTY, centroids: Box32::EMPTY };
+
+    fn union(self, o: Group) -> Group {
+        Group { bounds: self.bounds.union(o.bounds), centroids: self.centroids.union(o.centroids) }
+    }
 }
 
 /// Builds the subtree over `items` (whose first item is item `offset` of the whole order, and
@@ -652,17 +660,21 @@ impl Bins {
     }
 }
 
-/// The box around the items' centres (doubled, as [`Box32::centre2`] keeps them).
-fn centroid_bounds(items: &[BuildItem]) -> Box32 {
+/// The boxes around the items and around their centres (doubled, as [`Box32::centre2`] keeps
+/// them).
+fn group_of(items: &[BuildItem]) -> Group {
     if items.len() >= PARALLEL_ITEMS {
         use rayon::prelude::*;
         return items
             .par_chunks(PARALLEL_ITEMS / 4)
-            .map(centroid_bounds)
-            .reduce_with(Box32::union)
-            .unwrap_or(Box32::EMPTY);
+            .map(group_of)
+            .reduce_with(Group::union)
+            .unwrap_or(Group::EMPTY);
     }
-    items.iter().fold(Box32::EMPTY, |b, it| b.include(it.centre))
+    items.iter().fold(Group::EMPTY, |g, it| Group {
+        bounds: g.bounds.union(it.bounds),
+        centroids: g.centroids.include(it.centre),
+    })
 }
 
 /// The best binned SAH split of `items` over all three axes, if the items' centres are not all
@@ -752,9 +764,5 @@ fn split(items: &mut [BuildItem], group: &Group, params: BuildParams) -> (usize,
     let axis = (0..3).max_by(|&a, &b| (cb.hi[a] - cb.lo[a]).total_cmp(&(cb.hi[b] - cb.lo[b]))).unwrap_or(0);
     let mid = n / 2;
     items.select_nth_unstable_by(mid, |a, b| a.centre[axis].total_cmp(&b.centre[axis]));
-    let part = |items: &[BuildItem]| Group {
-        bounds: items.iter().fold(Box32::EMPTY, |b, it| b.union(it.bounds)),
-        centroids: centroid_bounds(items),
-    };
-    (mid, part(&items[..mid]), part(&items[mid..]))
+    (mid, group_of(&items[..mid]), group_of(&items[mid..]))
 }
