@@ -255,9 +255,15 @@ pub fn write_atomically<E: std::error::Error + 'static>(
     if path.is_dir() {
         return Err(WriteError::TargetIsDirectory { path: path.to_path_buf() });
     }
-    let mut tmp = create_temporary(folder).map_err(io)?;
-    let tmp_path = tmp.path().to_path_buf();
-    unfinished().push(tmp_path.clone());
+    // Created and registered under the registry's lock: a signal handler that sees the file on
+    // disk also finds it in the registry (it waits for the lock), so it never outlives the process.
+    let (mut tmp, tmp_path) = {
+        let mut list = unfinished();
+        let tmp = create_temporary(folder).map_err(io)?;
+        let tmp_path = tmp.path().to_path_buf();
+        list.push(tmp_path.clone());
+        (tmp, tmp_path)
+    };
     let result = (|| {
         let file = encode_into(tmp.as_file_mut(), path, encode)?;
         file.sync_all().map_err(io)?;
