@@ -78,8 +78,13 @@ impl SceneUniforms {
             ],
             water_colour: [water.colour[0], water.colour[1], water.colour[2], water.clarity],
             waves: [wrap(travel.x), wrap(travel.y), wrap(crossing.x), wrap(crossing.y)],
-            wave_params: [1.0 / water.wave_scale, water.wave_strength, 0.0, 0.0],
-            water_flags: [0.0, 0.0, inputs.frame_size.0 as f32, inputs.frame_size.1 as f32],
+            wave_params: [
+                1.0 / water.wave_scale,
+                water.wave_strength,
+                flag(water.refraction),
+                flag(water.glint),
+            ],
+            water_flags: [flag(water.foam), 0.0, inputs.frame_size.0 as f32, inputs.frame_size.1 as f32],
             shadow_matrix: inputs.shadow_matrix.to_cols_array_2d(),
             sky_box: [box_size.x / 2.0, box_size.y, box_size.z / 2.0, 1.0 / SHADOW_MAP_SIZE as f32],
         }

@@ -17,10 +17,11 @@ struct Scene {
     water_colour: vec4<f32>,
     // The two wave normal maps' offsets, in tiles: xy and zw.
     waves: vec4<f32>,
-    // x: 1 / world units a wave tile spans, y: wave strength, z, w: unused (the sea's features
-    // are its pipeline's constants, see `sea.wgsl`).
+    // x: 1 / world units a wave tile spans, y: wave strength, z: 1 when the sea floor shows,
+    // w: 1 when the sun glints.
     wave_params: vec4<f32>,
-    // x, y: unused, z, w: the frame's size in pixels.
+    // x: 1 when foam lines the shore, y: unused (the sea's pipeline is chosen for whether the
+    // land's reflection is drawn), z, w: the frame's size in pixels.
     water_flags: vec4<f32>,
     // World to the shadow map's clip space (orthographic, from the sun).
     shadow_matrix: mat4x4<f32>,

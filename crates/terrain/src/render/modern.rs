@@ -10,7 +10,7 @@ use super::light_map::LightMap;
 use super::lighting::{Lighting, SceneInputs, SceneUniforms, sun_matrix};
 use super::pipeline::{PassContext, PipelineSpec, pipeline, shader_source};
 use super::reflection::{REFLECTION_FORMAT, ReflectionTarget};
-use super::sea::{SeaFeatures, SeaPass};
+use super::sea::SeaPass;
 use super::shadow::ShadowPass;
 use super::sky::{SkyFaces, SkyPass};
 use super::{RenderError, Renderer};
@@ -169,13 +169,6 @@ impl Renderer {
             let view = modern.reflection.as_ref().map(ReflectionTarget::view);
             modern.sea.bind(&gpu.device, grid, (&modern.albedo, modern.light_map.view()), view);
         }
-        let context = PassContext {
-            device: &gpu.device,
-            queue: &gpu.queue,
-            frame_layout: &self.frame_layout,
-            target_format: self.target_format,
-        };
-        modern.sea.use_features(&context, SeaFeatures::of(&settings.water));
         // The shadow map and the light map, drawn again only when the sun has moved or shadows
         // were switched.
         let shadows = settings.sun.shadows;

@@ -10,7 +10,6 @@ use super::pipeline::{
 };
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
-use crate::settings::{ReflectionQuality, WaterSettings};
 use crate::world::procedural::{WAVE_MAP_SIZE, wave_map};
 
 /// Seeds of the two wave maps (the same for every world).
@@ -19,56 +18,14 @@ const WAVE_SEEDS: [u32; 2] = [11, 12];
 /// Noise features across each wave map: broad swell, then finer ripples.
 const WAVE_CELLS: [f64; 2] = [3.0, 5.0];
 
-/// The water's features that its shader is compiled with or without (`sea.wgsl`'s override
-/// constants): lavapipe runs both sides of a branch on a uniform for every pixel, so a feature
-/// switched off by a uniform would still cost its whole price.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct SeaFeatures {
-    /// The land's reflection is drawn into the reflection texture (else the water mirrors the
-    /// sky box).
-    pub reflected_land: bool,
-    /// The sea floor shows through shallow water.
-    pub floor: bool,
-    /// The sun glints on the waves.
-    pub glint: bool,
-    /// Foam lines the shore.
-    pub foam: bool,
-}
-
-impl SeaFeatures {
-    /// The water as the settings ask for it.
-    pub fn of(water: &WaterSettings) -> SeaFeatures {
-        SeaFeatures {
-            reflected_land: water.reflection != ReflectionQuality::Off,
-            floor: water.refraction,
-            glint: water.glint,
-            foam: water.foam,
-        }
-    }
-
-    /// The values of `sea.wgsl`'s override constants.
-    fn constants(self) -> [(&'static str, f64); 4] {
-        let value = |on: bool| f64::from(u8::from(on));
-        [
-            ("REFLECTED_LAND", value(self.reflected_land)),
-            ("SEA_FLOOR", value(self.floor)),
-            ("GLINT", value(self.glint)),
-            ("FOAM", value(self.foam)),
-        ]
-    }
-}
-
 /// The water's GPU resources.
 #[derive(Debug)]
 pub struct SeaPass {
-    /// The pipelines made so far, one for each set of features drawn (made when first needed:
-    /// a switch in the settings panel costs one shader compilation, once).
-    pipelines: Vec<(SeaFeatures, wgpu::RenderPipeline)>,
-    /// The features drawn now: a key of `pipelines`.
-    features: SeaFeatures,
+    /// The pipelines without and with the reflection texture (`sea.wgsl`'s `REFLECTED_LAND`).
+    pipelines: [wgpu::RenderPipeline; 2],
+    /// Whether a reflection of the land is bound.
+    reflecting: bool,
     layout: wgpu::BindGroupLayout,
-    /// The lighting's layout (group 2), for the pipelines made later.
-    lighting_layout: wgpu::BindGroupLayout,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     index_count: u32,
@@ -112,14 +69,31 @@ impl SeaPass {
                 &sampler(device, false),
             ),
         );
+        let attributes = wgpu::vertex_attr_array![0 => Float32x3];
+        let buffers = [wgpu::VertexBufferLayout {
+            array_stride: size_of::<[f32; 3]>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attributes,
+        }];
+        let layouts = [&layout, lighting.0];
+        let sea = |reflecting: bool| {
+            let constants = [("REFLECTED_LAND", f64::from(u8::from(reflecting)))];
+            let spec = PipelineSpec {
+                constants: &constants,
+                ..PipelineSpec::new(
+                    "sea",
+                    shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl"),
+                    &layouts,
+                    &buffers,
+                )
+            };
+            pipeline(context, &spec, false)
+        };
         let (positions, indices) = sea_mesh(config);
-        let features = SeaFeatures::of(&WaterSettings::default());
-        let pipelines = vec![(features, sea_pipeline(context, [&layout, lighting.0], features))];
         Ok(Self {
-            pipelines,
-            features,
+            pipelines: [sea(false), sea(true)],
+            reflecting: false,
             layout,
-            lighting_layout: lighting.0.clone(),
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("sea vertices"),
                 contents: bytemuck::cast_slice(&positions),
@@ -148,19 +122,11 @@ impl SeaPass {
         (colour, light): (&wgpu::TextureView, &wgpu::TextureView),
         reflection: Option<&wgpu::TextureView>,
     ) {
+        self.reflecting = reflection.is_some();
         let reflection = reflection.unwrap_or(&self.no_reflection);
         let (wrap, clamp) = (sampler(device, true), sampler(device, false));
         let entries = bindings(grid, &self.wave_maps, (colour, light), reflection, &wrap, &clamp);
         self.bind_group = bind_group_for(device, "sea", &self.layout, &entries);
-    }
-
-    /// Draws the water with `features` from now on, making its pipeline if it is the first time.
-    pub fn use_features(&mut self, context: &PassContext<'_>, features: SeaFeatures) {
-        if !self.pipelines.iter().any(|(f, _)| *f == features) {
-            let pipeline = sea_pipeline(context, [&self.layout, &self.lighting_layout], features);
-            self.pipelines.push((features, pipeline));
-        }
-        self.features = features;
     }
 
     /// GPU memory of the wave maps, in bytes.
@@ -170,10 +136,7 @@ impl SeaPass {
 
     /// Draws the water in one draw call.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &wgpu::BindGroup) {
-        let Some((_, pipeline)) = self.pipelines.iter().find(|(f, _)| *f == self.features) else {
-            return;
-        };
-        pass.set_pipeline(pipeline);
+        pass.set_pipeline(&self.pipelines[usize::from(self.reflecting)]);
         pass.set_bind_group(0, frame, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_bind_group(2, &self.lighting, &[]);
@@ -181,31 +144,6 @@ impl SeaPass {
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
         pass.draw_indexed(0..self.index_count, 0, 0..1);
     }
-}
-
-/// The water's pipeline with `features` compiled in, over its own group and the lighting's.
-fn sea_pipeline(
-    context: &PassContext<'_>,
-    layouts: [&wgpu::BindGroupLayout; 2],
-    features: SeaFeatures,
-) -> wgpu::RenderPipeline {
-    let attributes = wgpu::vertex_attr_array![0 => Float32x3];
-    let buffers = [wgpu::VertexBufferLayout {
-        array_stride: size_of::<[f32; 3]>() as u64,
-        step_mode: wgpu::VertexStepMode::Vertex,
-        attributes: &attributes,
-    }];
-    let constants = features.constants();
-    let spec = PipelineSpec {
-        constants: &constants,
-        ..PipelineSpec::new(
-            "sea",
-            shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl"),
-            &layouts,
-            &buffers,
-        )
-    };
-    pipeline(context, &spec, false)
 }
 
 /// Cells of the water's grid along each side: fine enough for its per-vertex fog and horizon

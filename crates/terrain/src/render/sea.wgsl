@@ -48,13 +48,9 @@ fn floor_height(xz: vec2<f32>) -> f32 {
 
 const F0: f32 = 0.02;
 
-// The features switched in the settings, as pipeline constants rather than uniforms, so that
-// each pipeline has only the code it runs (see `SeaFeatures`): the land's reflection drawn into
-// `reflection` (else the water mirrors the sky box), the sea floor, the sun's glint, the foam.
+// Whether the land's reflection is drawn into `reflection` (else the water mirrors the sky box):
+// a pipeline constant rather than a uniform, so that each pipeline has only its own branch.
 override REFLECTED_LAND: bool = true;
-override SEA_FLOOR: bool = true;
-override GLINT: bool = true;
-override FOAM: bool = true;
 
 @fragment
 fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
@@ -88,7 +84,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     let water = scene.water_colour.rgb * shade;
     var below = water;
     let depth = -floor_height(in.world.xz);
-    if (SEA_FLOOR && depth < 8.0 * scene.water_colour.w) {
+    if (scene.wave_params.z > 0.5 && depth < 8.0 * scene.water_colour.w) {
         let down = refract(-view, normal, 1.0 / 1.33);
         let step_down = down / max(-down.y, 0.05);
         // Follow the refracted ray to the depth under the surface point, then to the depth
@@ -107,7 +103,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     var colour = mix(below, reflected, fresnel);
 
     // The sun's glint: a sharp highlight of the waves' facets toward the sun.
-    if (GLINT && scene.sun_direction.w > 0.5) {
+    if (scene.wave_params.w > 0.5 && scene.sun_direction.w > 0.5) {
         let sun = scene.sun_direction.xyz;
         let half_vector = normalize(sun + view);
         let highlight = max(dot(normal, half_vector), 0.0);
@@ -118,7 +114,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     }
 
     // Foam where the water is shallow, broken up by the wave maps' foam channel.
-    if (FOAM && depth > -0.02) {
+    if (scene.water_flags.x > 0.5 && depth > -0.02) {
         let shore = 1.0 - smoothstep(0.0, 0.06, depth);
         let pattern = smoothstep(0.5, 0.85, (a.b + b.b) * 0.5 + 0.3 * shore);
         let foam = clamp(shore * pattern * 1.5, 0.0, 1.0);
