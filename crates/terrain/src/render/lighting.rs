@@ -8,7 +8,7 @@ use glam::{DVec2, Mat4, Vec3};
 use super::pipeline::{Binding, bind_group};
 use super::texture::sampler;
 use crate::config::SceneConfig;
-use crate::settings::Settings;
+use crate::settings::{ReflectionQuality, Settings};
 use crate::world::SkyBox;
 
 /// Side of the shadow map, in texels.
@@ -84,7 +84,12 @@ impl SceneUniforms {
                 flag(water.refraction),
                 flag(water.glint),
             ],
-            water_flags: [flag(water.foam), 0.0, inputs.frame_size.0 as f32, inputs.frame_size.1 as f32],
+            water_flags: [
+                flag(water.foam),
+                flag(water.reflection != ReflectionQuality::Off),
+                inputs.frame_size.0 as f32,
+                inputs.frame_size.1 as f32,
+            ],
             shadow_matrix: inputs.shadow_matrix.to_cols_array_2d(),
             sky_box: [box_size.x / 2.0, box_size.y, box_size.z / 2.0, 1.0 / SHADOW_MAP_SIZE as f32],
         }

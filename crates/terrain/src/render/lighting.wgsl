@@ -20,8 +20,8 @@ struct Scene {
     // x: 1 / world units a wave tile spans, y: wave strength, z: 1 when the sea floor shows,
     // w: 1 when the sun glints.
     wave_params: vec4<f32>,
-    // x: 1 when foam lines the shore, y: unused (the sea's pipeline is chosen for whether the
-    // land's reflection is drawn), z, w: the frame's size in pixels.
+    // x: 1 when foam lines the shore, y: 1 when the land's reflection is drawn, z, w: the frame's
+    // size in pixels.
     water_flags: vec4<f32>,
     // World to the shadow map's clip space (orthographic, from the sun).
     shadow_matrix: mat4x4<f32>,

@@ -38,10 +38,6 @@ pub struct PipelineSpec<'a> {
     pub depth_bias: wgpu::DepthBiasState,
     /// Whether the pass has a depth buffer to test against.
     pub depth: bool,
-    /// Values of the shader's pipeline-overridable constants (`override` in WGSL), by name. A
-    /// feature switched by one is compiled out of the pipelines that do without it: software
-    /// rasterisers such as lavapipe run both sides of a branch on a uniform for every pixel.
-    pub constants: &'a [(&'a str, f64)],
 }
 
 impl<'a> PipelineSpec<'a> {
@@ -65,7 +61,6 @@ impl<'a> PipelineSpec<'a> {
             polygon_mode: wgpu::PolygonMode::Fill,
             depth_bias: wgpu::DepthBiasState::default(),
             depth: true,
-            constants: &[],
         }
     }
 }
@@ -124,7 +119,6 @@ fn build(
         immediate_size: 0,
     });
     let buffers: Vec<Option<wgpu::VertexBufferLayout<'_>>> = spec.buffers.iter().cloned().map(Some).collect();
-    let compilation = wgpu::PipelineCompilationOptions { constants: spec.constants, ..Default::default() };
     let targets = [Some(wgpu::ColorTargetState {
         format: context.target_format,
         blend: Some(if spec.blend { wgpu::BlendState::ALPHA_BLENDING } else { wgpu::BlendState::REPLACE }),
@@ -136,7 +130,7 @@ fn build(
         vertex: wgpu::VertexState {
             module,
             entry_point: Some(spec.vertex_entry),
-            compilation_options: compilation.clone(),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
             buffers: &buffers,
         },
         primitive: wgpu::PrimitiveState {
@@ -159,7 +153,7 @@ fn build(
         fragment: spec.fragment_entry.map(|entry| wgpu::FragmentState {
             module,
             entry_point: Some(entry),
-            compilation_options: compilation.clone(),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
             targets: &targets,
         }),
         multiview_mask: None,

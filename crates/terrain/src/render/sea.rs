@@ -21,10 +21,7 @@ const WAVE_CELLS: [f64; 2] = [3.0, 5.0];
 /// The water's GPU resources.
 #[derive(Debug)]
 pub struct SeaPass {
-    /// The pipelines without and with the reflection texture (`sea.wgsl`'s `REFLECTED_LAND`).
-    pipelines: [wgpu::RenderPipeline; 2],
-    /// Whether a reflection of the land is bound.
-    reflecting: bool,
+    pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
@@ -76,23 +73,15 @@ impl SeaPass {
             attributes: &attributes,
         }];
         let layouts = [&layout, lighting.0];
-        let sea = |reflecting: bool| {
-            let constants = [("REFLECTED_LAND", f64::from(u8::from(reflecting)))];
-            let spec = PipelineSpec {
-                constants: &constants,
-                ..PipelineSpec::new(
-                    "sea",
-                    shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl"),
-                    &layouts,
-                    &buffers,
-                )
-            };
-            pipeline(context, &spec, false)
-        };
+        let spec = PipelineSpec::new(
+            "sea",
+            shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl"),
+            &layouts,
+            &buffers,
+        );
         let (positions, indices) = sea_mesh(config);
         Ok(Self {
-            pipelines: [sea(false), sea(true)],
-            reflecting: false,
+            pipeline: pipeline(context, &spec, false),
             layout,
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("sea vertices"),
@@ -122,7 +111,6 @@ impl SeaPass {
         (colour, light): (&wgpu::TextureView, &wgpu::TextureView),
         reflection: Option<&wgpu::TextureView>,
     ) {
-        self.reflecting = reflection.is_some();
         let reflection = reflection.unwrap_or(&self.no_reflection);
         let (wrap, clamp) = (sampler(device, true), sampler(device, false));
         let entries = bindings(grid, &self.wave_maps, (colour, light), reflection, &wrap, &clamp);
@@ -136,7 +124,7 @@ impl SeaPass {
 
     /// Draws the water in one draw call.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &wgpu::BindGroup) {
-        pass.set_pipeline(&self.pipelines[usize::from(self.reflecting)]);
+        pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, frame, &[]);
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_bind_group(2, &self.lighting, &[]);

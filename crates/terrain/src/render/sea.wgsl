@@ -48,10 +48,6 @@ fn floor_height(xz: vec2<f32>) -> f32 {
 
 const F0: f32 = 0.02;
 
-// Whether the land's reflection is drawn into `reflection` (else the water mirrors the sky box):
-// a pipeline constant rather than a uniform, so that each pipeline has only its own branch.
-override REFLECTED_LAND: bool = true;
-
 @fragment
 fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     let eye = frame.eye.xyz;
@@ -73,7 +69,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     // What the surface reflects: the mirrored world (distorted by the waves) or the sky.
     var reflected: vec3<f32>;
     let size = scene.water_flags.zw;
-    if (REFLECTED_LAND) {
+    if (scene.water_flags.y > 0.5) {
         let uv = in.clip.xy / size + normal.xz * vec2<f32>(0.06, 0.06) / (1.0 + 0.15 * distance);
         reflected = textureSampleLevel(reflection, edge_clamp, clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)), 0.0).rgb;
     } else {
