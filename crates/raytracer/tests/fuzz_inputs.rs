@@ -41,7 +41,7 @@ fn inputs(target: &str) -> Vec<(PathBuf, Vec<u8>)> {
 #[test]
 fn scene_parser_inputs() {
     for (path, bytes) in inputs("scene_parser") {
-        let source = SourceFile::from_bytes(path.display().to_string(), None, &bytes);
+        let source = SourceFile::from_bytes(path.display().to_string(), None, bytes.as_slice());
         match scene::parse(&source) {
             Ok(parsed) => parsed.diagnostics.iter().for_each(|d| drop(d.to_string())),
             Err(error) => {

@@ -697,7 +697,7 @@ mod properties {
 
         #[test]
         fn arbitrary_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
-            let src = SourceFile::from_bytes("fuzz.txt", None, &bytes);
+            let src = SourceFile::from_bytes("fuzz.txt", None, bytes.as_slice());
             check(src.text());
         }
 

@@ -26,9 +26,10 @@ pub struct SourceFile {
     line_starts: Vec<usize>,
 }
 
-/// Largest scene file read, in bytes (32 MiB). The course's scenes take a few kilobytes; the
-/// limit keeps a wrong path (a disk image, `/dev/zero`) from being read into memory.
-pub const MAX_SCENE_FILE_BYTES: u64 = 32 << 20;
+/// Largest scene file read, in bytes (512 MiB, about five million spheres of about 100 bytes of
+/// text each). The course's scenes take a few kilobytes and a generated scene of a million
+/// spheres about 100 MiB; the limit keeps a wrong path (a disk image) from being read into memory.
+pub const MAX_SCENE_FILE_BYTES: u64 = 512 << 20;
 
 /// A scene file that could not be read.
 #[derive(Debug, thiserror::Error)]
@@ -98,25 +99,33 @@ impl SourceFile {
         let dir = path
             .parent()
             .map(|p| if p.as_os_str().is_empty() { PathBuf::from(".") } else { p.to_path_buf() });
-        Ok(SourceFile::from_bytes(path.display().to_string(), dir, &bytes))
+        Ok(SourceFile::from_bytes(path.display().to_string(), dir, bytes))
     }
 
     /// Decodes scene text given as bytes: UTF-8 (with or without a byte-order mark), or else GBK,
     /// the encoding of the course's Chinese comments. Only ASCII matters outside comments, so a
-    /// wrong guess can at worst garble a comment.
-    pub fn from_bytes(name: impl Into<String>, dir: Option<PathBuf>, bytes: &[u8]) -> SourceFile {
-        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-        let text = match std::str::from_utf8(bytes) {
-            Ok(text) => text.to_owned(),
-            Err(_) => encoding_rs::GBK.decode_without_bom_handling(bytes).0.into_owned(),
-        };
+    /// wrong guess can at worst garble a comment. UTF-8 given as a `Vec` is kept without a copy.
+    pub fn from_bytes(
+        name: impl Into<String>,
+        dir: Option<PathBuf>,
+        bytes: impl Into<Vec<u8>>,
+    ) -> SourceFile {
+        let mut bytes = bytes.into();
+        if bytes.starts_with(b"\xEF\xBB\xBF") {
+            bytes.drain(..3);
+        }
+        let text = String::from_utf8(bytes)
+            .unwrap_or_else(|e| encoding_rs::GBK.decode_without_bom_handling(e.as_bytes()).0.into_owned());
         SourceFile::from_text(name, dir, text)
     }
 
     /// Wraps scene text that is already decoded.
     pub fn from_text(name: impl Into<String>, dir: Option<PathBuf>, text: String) -> SourceFile {
-        let mut line_starts = vec![0];
-        line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+        // Counted first, so that a file of millions of lines fills one list of the right size.
+        let ends = memchr::memchr_iter(b'\n', text.as_bytes());
+        let mut line_starts = Vec::with_capacity(1 + ends.count());
+        line_starts.push(0);
+        line_starts.extend(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1));
         SourceFile { name: name.into(), dir, text, line_starts }
     }
 
@@ -208,7 +217,7 @@ mod tests {
         let file = std::fs::File::create(&big).expect("create");
         file.set_len(MAX_SCENE_FILE_BYTES + 1).expect("sparse file");
         let err = SourceFile::read(&big).expect_err("too large");
-        assert!(err.to_string().contains("larger than 32 MiB"), "{err}");
+        assert!(err.to_string().contains("larger than 512 MiB"), "{err}");
         let err = SourceFile::read(&dir.path().join("none.txt")).expect_err("missing");
         assert!(matches!(err, ReadError::Io { .. }), "{err}");
     }
