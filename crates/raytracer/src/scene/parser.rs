@@ -8,7 +8,7 @@
 
 use std::collections::HashMap;
 use std::fmt;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
@@ -125,9 +125,10 @@ const PIECE_LINES: u32 = 1 << 16;
 /// whole-file parse is at the top level), no piece has anything to report, and the file has at
 /// most one `background` and one `camera` block and describes something. Otherwise `None`: the
 /// file is then parsed line by line, which reports its problems in order. The pieces depend on
-/// the text only, so the scene does not depend on the thread count; equal untextured materials
-/// are shared across pieces as within one (which piece's copy all share may vary; they are
-/// equal).
+/// the text only, so the scene does not depend on the thread count. Equal untextured materials
+/// are shared within a piece, not across pieces: each piece keeps its own copy of each (a few
+/// hundred copies for a million spheres), so that the threads neither wait for one lock nor
+/// contend for the reference counts of the same few copies.
 fn parse_in_pieces(source: &SourceFile) -> Option<Parsed> {
     use rayon::prelude::*;
     let lines = source.line_count();
@@ -152,12 +153,10 @@ fn parse_in_pieces(source: &SourceFile) -> Option<Parsed> {
         .zip(starts.iter().skip(1).map(|s| s - 1).chain([lines]))
         .map(|(&a, b)| (a, b))
         .collect();
-    let materials = Mutex::new(HashMap::new());
     let pieces: Vec<Option<Parser>> = ranges
         .into_par_iter()
         .map(|(first, last)| {
             let mut parser = Parser::new(source);
-            parser.pieces_materials = Some(&materials);
             let state = parser.run_lines(first, last);
             let clean = matches!(state, State::TopLevel)
                 && parser.diagnostics.is_empty()
@@ -507,8 +506,6 @@ struct Parser<'s> {
     seen: Seen,
     /// Untextured materials seen so far, by their numbers' bits (see [`Parser::share`]).
     materials: HashMap<[u64; 12], Arc<Material>>,
-    /// When the file is read in pieces, the materials of all pieces, which every piece shares.
-    pieces_materials: Option<&'s Mutex<HashMap<[u64; 12], Arc<Material>>>>,
     /// The emptied entry list of the last block read, for the next block to fill (a scene of a
     /// million spheres then allocates no list per block).
     spare_entries: Vec<Entry<'s>>,
@@ -525,14 +522,13 @@ impl<'s> Parser<'s> {
             scene: Scene::empty(),
             seen: Seen::default(),
             materials: HashMap::new(),
-            pieces_materials: None,
             spare_entries: Vec::new(),
         }
     }
 
     /// The shared copy of an untextured material equal to `m` (a scene of a million spheres in a
-    /// handful of materials keeps a handful); textured materials stay their own (their texture
-    /// reference names the line that set it).
+    /// handful of materials keeps a handful per piece, see [`parse_in_pieces`]); textured
+    /// materials stay their own (their texture reference names the line that set it).
     fn share(&mut self, m: Material) -> Arc<Material> {
         if m.texture.is_some() || m.bump.is_some() {
             return Arc::new(m);
@@ -545,14 +541,7 @@ impl<'s> Parser<'s> {
         if let Some(shared) = self.materials.get(&key) {
             return shared.clone();
         }
-        let shared = match self.pieces_materials {
-            // The copy of the first piece to meet it.
-            Some(all) => {
-                let mut all = all.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-                all.entry(key).or_insert_with(|| Arc::new(m)).clone()
-            }
-            None => Arc::new(m),
-        };
+        let shared = Arc::new(m);
         self.materials.insert(key, shared.clone());
         shared
     }
