@@ -223,6 +223,22 @@ mod tests {
     }
 
     #[test]
+    fn files_past_the_old_32_mib_limit_are_read() {
+        // 40 MiB: a generated scene of 400,000 spheres takes as much. Mostly one long comment
+        // line, so that the test reads a large file without parsing a large scene.
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("large.txt");
+        let mut text = String::from("# ");
+        text.push_str(&"x".repeat(40 << 20));
+        text.push_str("\nprimitive sphere\n O= 0 0 0\n R= 1\nend\n");
+        std::fs::write(&path, &text).expect("write");
+        let src = SourceFile::read(&path).expect("a 40 MiB scene file is read");
+        assert_eq!(src.text().len(), text.len());
+        assert_eq!(src.line_count(), 6);
+        assert_eq!(src.line(3), " O= 0 0 0");
+    }
+
+    #[test]
     fn utf8_bom_is_dropped() {
         let src = SourceFile::from_bytes("t", None, b"\xEF\xBB\xBFcamera\nend\n");
         assert_eq!(src.line(1), "camera");
