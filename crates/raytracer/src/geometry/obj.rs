@@ -21,9 +21,9 @@ use crate::scene::Location;
 pub const MAX_OBJ_BYTES: u64 = 2 << 30;
 /// Largest material library (`.mtl`) read, in bytes.
 pub const MAX_MTL_BYTES: u64 = 64 << 20;
-/// Most triangles one mesh file may hold after fanning polygons (the indices of 2^28 triangles
-/// take 3 GiB).
-pub const MAX_TRIANGLES: usize = 1 << 28;
+/// Most triangles one mesh file may hold after fanning polygons: as many as one BVH holds (about
+/// 134 million, whose indices alone take 1.5 GiB).
+pub const MAX_TRIANGLES: usize = crate::accel::wide::MAX_ITEMS;
 
 /// Where a mesh's vertices go: `O + size * Rz(az) Ry(ay) Rx(ax) v` (rotate about x first, then
 /// y, then z, right-handed; then scale per axis; then translate).
