@@ -223,7 +223,7 @@ mod tests {
     }
 
     #[test]
-    fn files_past_the_old_32_mib_limit_are_read() {
+    fn scene_files_of_tens_of_mib_are_read() {
         // 40 MiB: a generated scene of 400,000 spheres takes as much. Mostly one long comment
         // line, so that the test reads a large file without parsing a large scene.
         let dir = tempfile::tempdir().expect("temp dir");
