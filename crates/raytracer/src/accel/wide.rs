@@ -711,6 +711,12 @@ fn sah_split(items: &[BuildItem], group: &Group, params: BuildParams) -> Option<
         }
         let (mut acc, mut n) = (Box32::EMPTY, 0);
         for b in 0..BINS - 1 {
+            // After an empty bin the parts are those after the bin before it, whose cost (the
+            // same number) could not win: skip it. Small groups leave most bins empty, and they
+            // are most of a big build's splits.
+            if counts[b] == 0 {
+                continue;
+            }
             acc = acc.union(boxes[b]);
             n += counts[b] as usize;
             let nr = right_n[b + 1];
