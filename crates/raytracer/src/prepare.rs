@@ -609,10 +609,18 @@ fn load_meshes(
                             .into(),
                     ],
                 }),
-                Err(e) => Err(obj_diagnostic(
-                    &file.location,
-                    ObjError { file: file.path.clone(), line: None, message: e.to_string() },
-                )),
+                Err(e) => {
+                    // The search is the textures' (which words its errors for textures).
+                    let message = match e {
+                        TextureError::Directory { .. } => "it is a directory, not an OBJ file".to_string(),
+                        TextureError::NotAFile { .. } => "it is not a regular file".to_string(),
+                        e => e.to_string(),
+                    };
+                    Err(obj_diagnostic(
+                        &file.location,
+                        ObjError { file: file.path.clone(), line: None, message },
+                    ))
+                }
             };
             (i, result)
         })

@@ -172,6 +172,18 @@ fn bad_mesh_files_name_the_scene_line_and_the_obj_line() {
     let errors = prepare(&text, dir.path()).expect_err("missing");
     assert!(errors[0].message.contains("cannot find mesh `missing.obj`"), "{}", errors[0]);
 
+    // A folder, or a device, where the mesh should be: named as a mesh, not as a texture.
+    std::fs::create_dir(dir.path().join("folder.obj")).expect("mkdir");
+    for (name, words) in
+        [("folder.obj", "it is a directory, not an OBJ file"), ("/dev/null", "it is not a regular file")]
+    {
+        let text = format!("{VIEW}primitive mesh\n file= {name}\nend\n");
+        let errors = prepare(&text, dir.path()).expect_err(name);
+        let message = &errors[0].message;
+        assert!(message.contains("cannot use mesh") && message.contains(words), "{message}");
+        assert!(!message.contains("texture"), "{message}");
+    }
+
     // A truncated file: cut in the middle of its last line.
     let mut big = String::new();
     for i in 0..20_000 {
