@@ -176,13 +176,13 @@ impl Shape {
         match self {
             Shape::Sphere(s) => {
                 // u runs from the -pole to the +pole, v around the pole.
-                let i = (point - s.centre).normalize_or(s.pole);
-                let around = s.pole.cross(i);
+                let i = (point - s.centre).normalize_or(s.pole());
+                let around = s.pole().cross(i);
                 let up = i.cross(around);
                 (up, around)
             }
-            Shape::Plane(p) => match p.texture_axes {
-                Some((u, v)) => (u, v),
+            Shape::Plane(p) => match p.texture_axes.as_deref() {
+                Some(&(u, v)) => (u, v),
                 None => any_tangents(p.normal),
             },
             Shape::Square(s) => (s.dx, s.dy),

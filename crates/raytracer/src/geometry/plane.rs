@@ -14,7 +14,8 @@ pub struct Plane {
     pub offset: f64,
     /// `Dx / |Dx|^2` and `Dy / |Dy|^2` (`Dx=`, `Dy=`): `u = P . tex_u`, so one texture tile spans
     /// `|Dx|` world units. `None` when the file gives no axes (the plane must then be untextured).
-    pub texture_axes: Option<(DVec3, DVec3)>,
+    /// Kept apart, only needed to shade: it would make every shape of a scene 48 bytes larger.
+    pub texture_axes: Option<Box<(DVec3, DVec3)>>,
 }
 
 impl Plane {
@@ -30,7 +31,7 @@ impl Plane {
             let inverse = v / usable_length_squared(v, name)?;
             if inverse.is_finite() { Ok(inverse) } else { Err(GeometryError::TooSmall(name)) }
         };
-        self.texture_axes = Some((inv(dx, "Dx")?, inv(dy, "Dy")?));
+        self.texture_axes = Some(Box::new((inv(dx, "Dx")?, inv(dy, "Dy")?)));
         Ok(self)
     }
 
@@ -48,8 +49,8 @@ impl Plane {
     /// Texture coordinates (spec 5.6): `u = P . Dx / |Dx|^2`, `v = P . Dy / |Dy|^2`, anchored in
     /// the world so the texture tiles. (0, 0) without texture axes.
     pub fn texture_coordinates(&self, point: DVec3) -> (f64, f64) {
-        match self.texture_axes {
-            Some((u, v)) => (point.dot(u), point.dot(v)),
+        match self.texture_axes.as_deref() {
+            Some(&(u, v)) => (point.dot(u), point.dot(v)),
             None => (0.0, 0.0),
         }
     }

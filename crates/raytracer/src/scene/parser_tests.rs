@@ -179,7 +179,7 @@ fn shapes_of_every_type() {
     match &prims[0].shape {
         Shape::Sphere(s) => {
             assert_eq!((s.centre, s.radius), (DVec3::new(1.0, 2.0, 3.0), 0.5));
-            assert_eq!((s.pole, s.seam), (DVec3::Z, DVec3::Y), "frame normalised");
+            assert_eq!((s.pole(), s.seam()), (DVec3::Z, DVec3::Y), "frame normalised");
         }
         other => panic!("{other:?}"),
     }
@@ -530,7 +530,7 @@ fn overflow_and_underflow_are_called_so() {
     let Shape::Plane(plane) = &p.scene.primitives[0].shape else { panic!("a plane") };
     assert_eq!(plane.normal, DVec3::X);
     let Shape::Sphere(sphere) = &p.scene.primitives[1].shape else { panic!("a sphere") };
-    assert_eq!((sphere.pole, sphere.seam), (DVec3::Z, DVec3::X));
+    assert_eq!((sphere.pole(), sphere.seam()), (DVec3::Z, DVec3::X));
     assert_eq!(p.scene.camera.dir, DVec3::Y);
 }
 
