@@ -297,6 +297,10 @@ impl PreparedScene {
             .primitives
             .iter()
             .map(|p| match &p.shape {
+                Shape::Sphere(s) => s.frame_memory(),
+                Shape::Plane(p) => {
+                    p.texture_axes.as_ref().map_or(0, |_| std::mem::size_of::<(DVec3, DVec3)>())
+                }
                 Shape::Square(_) => std::mem::size_of::<Square>(),
                 Shape::Cylinder(_) => std::mem::size_of::<Cylinder>(),
                 Shape::Triangle(_) => std::mem::size_of::<crate::geometry::Triangle>(),

@@ -60,6 +60,11 @@ impl Sphere {
         self.frame.as_ref().map_or(DVec3::Y, |f| f[1])
     }
 
+    /// Bytes the texture frame takes apart from the sphere (0 for the default frame).
+    pub fn frame_memory(&self) -> usize {
+        self.frame.as_ref().map_or(0, |_| std::mem::size_of::<[DVec3; 2]>())
+    }
+
     /// The nearest hit with `t_min < t < t_max`. Tangent rays miss.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<ShapeHit> {
@@ -130,6 +135,7 @@ mod tests {
         let other = Sphere::with_frame(DVec3::ZERO, 1.0, DVec3::X, DVec3::new(1.0, 0.0, 2.0)).expect("valid");
         assert_eq!((other.pole(), other.seam()), (DVec3::X, DVec3::Z), "the seam made perpendicular");
         assert_ne!(other, unit_sphere());
+        assert_eq!((unit_sphere().frame_memory(), other.frame_memory()), (0, 48));
         assert_eq!((unit_sphere().pole(), unit_sphere().seam()), (DVec3::Z, DVec3::Y));
     }
 
