@@ -298,9 +298,7 @@ impl PreparedScene {
             .iter()
             .map(|p| match &p.shape {
                 Shape::Sphere(s) => s.frame_memory(),
-                Shape::Plane(p) => {
-                    p.texture_axes.as_ref().map_or(0, |_| std::mem::size_of::<(DVec3, DVec3)>())
-                }
+                Shape::Plane(p) => p.axes_memory(),
                 Shape::Square(_) => std::mem::size_of::<Square>(),
                 Shape::Cylinder(_) => std::mem::size_of::<Cylinder>(),
                 Shape::Triangle(_) => std::mem::size_of::<crate::geometry::Triangle>(),

@@ -46,6 +46,11 @@ impl Plane {
         (t > t_min && t < t_max).then_some(ShapeHit { t, part: ShapePart::Main })
     }
 
+    /// Bytes the texture axes take apart from the plane (0 without them).
+    pub fn axes_memory(&self) -> usize {
+        self.texture_axes.as_ref().map_or(0, |_| std::mem::size_of::<(DVec3, DVec3)>())
+    }
+
     /// Texture coordinates (spec 5.6): `u = P . Dx / |Dx|^2`, `v = P . Dy / |Dy|^2`, anchored in
     /// the world so the texture tiles. (0, 0) without texture axes.
     pub fn texture_coordinates(&self, point: DVec3) -> (f64, f64) {
