@@ -151,10 +151,9 @@ pub struct PreparedScene {
     /// For each primitive, the indices of its texture and of its normal map ([`NO_TEXTURE`]:
     /// none).
     texture_of: Vec<[u32; 2]>,
-    /// BVH over the bounded primitives, when there are more than [`FLAT_LIMIT`].
+    /// BVH over the bounded primitives, when there are more than [`FLAT_LIMIT`]; its items are
+    /// the primitives' indices.
     bvh: WideBvh,
-    /// The primitive of each of the BVH's items, in leaf order.
-    bvh_primitives: Vec<u32>,
     /// Primitives tested one by one: the unbounded ones (planes), and all bounded ones too when
     /// there are at most [`FLAT_LIMIT`] (a loop beats a tree walk for a handful of shapes).
     linear: FlatSet,
@@ -229,28 +228,26 @@ impl PreparedScene {
             TextureSource::Builtin(_) => None,
         }));
 
-        // Every primitive's box, in parallel; the unbounded ones (planes) are tested one by one.
-        let all_boxes: Vec<Option<Box32>> =
-            scene.primitives.par_iter().map(|p| p.shape.bounds().map(|b| Box32::from_bounds(&b))).collect();
-        let (mut bounded, mut linear) = (Vec::new(), Vec::new());
-        let mut boxes = Vec::with_capacity(all_boxes.len());
-        for (i, b) in all_boxes.into_iter().enumerate() {
-            match b {
-                Some(b) => {
-                    bounded.push(i as u32);
-                    boxes.push(b);
-                }
-                None => linear.push(i as u32),
-            }
-        }
-        if bounded.len() <= FLAT_LIMIT {
-            linear.append(&mut bounded);
-            linear.sort_unstable();
+        // Every primitive's box, in parallel. The unbounded ones (planes) get the empty box, which
+        // the BVH leaves out, and are tested one by one; so the BVH's items are the primitives.
+        let mut boxes: Vec<Box32> = scene
+            .primitives
+            .par_iter()
+            .map(|p| p.shape.bounds().map_or(Box32::EMPTY, |b| Box32::from_bounds(&b)))
+            .collect();
+        let mut linear: Vec<u32> = scene
+            .primitives
+            .par_iter()
+            .enumerate()
+            .filter(|(_, p)| p.shape.bounds().is_none())
+            .map(|(i, _)| i as u32)
+            .collect();
+        if boxes.len() - linear.len() <= FLAT_LIMIT {
+            linear = (0..boxes.len() as u32).collect();
             boxes.clear();
         }
         let linear = FlatSet::new(&linear, &scene);
         let bvh = WideBvh::build(&boxes, BuildParams::SHAPES);
-        let bvh_primitives = bvh.order().par_iter().map(|&k| bounded[k as usize]).collect();
         let emitters = scene
             .lights
             .iter()
@@ -259,7 +256,6 @@ impl PreparedScene {
             .collect();
         Ok(PreparedScene {
             bvh,
-            bvh_primitives,
             linear,
             emitters,
             textures,
@@ -310,7 +306,6 @@ impl PreparedScene {
             + boxed
             + self.texture_of.capacity() * std::mem::size_of::<[u32; 2]>()
             + self.bvh.memory()
-            + self.bvh_primitives.capacity() * 4
             + self.mesh_stats().bytes
     }
 
@@ -337,7 +332,7 @@ impl PreparedScene {
         let mut best = self.linear.closest(ray, f64::INFINITY);
         let mut t_max = best.map_or(f64::INFINITY, |(_, h)| h.t);
         let prims = &self.scene.primitives;
-        let items = &self.bvh_primitives;
+        let items = self.bvh.order();
         self.bvh.traverse(&BoxRay::new(ray), box_limit(t_max), |first, count, _| {
             for &i in &items[first as usize..(first + count) as usize] {
                 if let Some(hit) = prims[i as usize].shape.intersect(ray, 0.0, t_max) {
@@ -357,7 +352,7 @@ impl PreparedScene {
             return true;
         }
         let prims = &self.scene.primitives;
-        let items = &self.bvh_primitives;
+        let items = self.bvh.order();
         let mut found = false;
         self.bvh.traverse(&BoxRay::new(ray), box_limit(t_max), |first, count, limit| {
             for &i in &items[first as usize..(first + count) as usize] {

@@ -13,7 +13,7 @@ use std::sync::Arc;
 use glam::{DVec2, DVec3};
 
 use super::diagnostic::{Diagnostic, Severity};
-use super::source::{SourceFile, Span};
+use super::source::{SourceFile, Span, count_line_ends, numbered_lines};
 use super::{Algorithm, Background, CameraSettings, Gradient, PhotonSettings, Primitive, Scene};
 use crate::error::GeometryError;
 use crate::geometry::{Bezier, Cylinder, MeshFile, MeshTransform, Plane, Shape, Sphere, Square, Triangle};
@@ -115,11 +115,60 @@ fn parse_line_by_line(source: &SourceFile) -> Result<Parsed, SceneError> {
     }
 }
 
-/// Files of at least twice this many lines are parsed in pieces of about this many lines, in
+/// Files of at least twice this many bytes are parsed in pieces of about this many bytes, in
 /// parallel (see [`parse_in_pieces`]).
-const PIECE_LINES: u32 = 1 << 16;
+const PIECE_BYTES: usize = 1 << 19;
 
-/// Parses a large file in pieces of about [`PIECE_LINES`] lines, each starting at a line that
+/// A piece of a scene file to parse: whole lines (without the line end after the last) and the
+/// number of the first.
+#[derive(Debug)]
+struct Piece<'s> {
+    first_line: u32,
+    text: &'s str,
+}
+
+/// Cuts `text` into pieces of about [`PIECE_BYTES`], each but the first starting at a line that
+/// opens a block. The cuts depend on the text only. The lines are counted on all threads.
+fn pieces(text: &str) -> Vec<Piece<'_>> {
+    use rayon::prelude::*;
+    let bytes = text.as_bytes();
+    let mut starts = vec![0];
+    let mut tokens = Vec::new();
+    let mut next = PIECE_BYTES;
+    // From the first line starting at or after `next`, the first line that opens a block.
+    'cut: while let Some(end) = bytes.get(next - 1..).and_then(|rest| memchr::memchr(b'\n', rest)) {
+        let mut start = next + end;
+        while start < bytes.len() {
+            let end = memchr::memchr(b'\n', &bytes[start..]).map_or(bytes.len(), |n| start + n);
+            tokenize(super::source::without_return(&text[start..end]), &mut tokens);
+            if tokens.first().is_some_and(|t| is_block_keyword(t.text)) {
+                starts.push(start);
+                next = start + PIECE_BYTES;
+                continue 'cut;
+            }
+            start = end + 1;
+        }
+        break;
+    }
+    let texts: Vec<&str> = starts
+        .iter()
+        .zip(starts.iter().skip(1).map(|&s| s - 1).chain([text.len()]))
+        .map(|(&a, b)| &text[a..b])
+        .collect();
+    let line_ends: Vec<usize> = texts.par_iter().map(|t| count_line_ends(t)).collect();
+    let mut first_line = 1;
+    texts
+        .into_iter()
+        .zip(line_ends)
+        .map(|(text, ends)| {
+            let piece = Piece { first_line, text };
+            first_line += ends as u32 + 1;
+            piece
+        })
+        .collect()
+}
+
+/// Parses a large file in pieces of about [`PIECE_BYTES`] bytes, each starting at a line that
 /// opens a block, on all threads; returns the scene only when it is certainly the one the parse
 /// line by line gives: every piece ends outside any block (so each next piece starts where the
 /// whole-file parse is at the top level), no piece has anything to report, and the file has at
@@ -131,33 +180,14 @@ const PIECE_LINES: u32 = 1 << 16;
 /// contend for the reference counts of the same few copies.
 fn parse_in_pieces(source: &SourceFile) -> Option<Parsed> {
     use rayon::prelude::*;
-    let lines = source.line_count();
-    if lines < 2 * PIECE_LINES {
+    if source.text().len() < 2 * PIECE_BYTES {
         return None;
     }
-    let mut starts = vec![1];
-    let mut tokens = Vec::new();
-    let mut next = 1 + PIECE_LINES;
-    while next <= lines {
-        let Some(start) = (next..=lines).find(|&n| {
-            tokenize(source.line(n), &mut tokens);
-            tokens.first().is_some_and(|t| is_block_keyword(t.text))
-        }) else {
-            break;
-        };
-        starts.push(start);
-        next = start + PIECE_LINES;
-    }
-    let ranges: Vec<(u32, u32)> = starts
-        .iter()
-        .zip(starts.iter().skip(1).map(|s| s - 1).chain([lines]))
-        .map(|(&a, b)| (a, b))
-        .collect();
-    let pieces: Vec<Option<Parser>> = ranges
+    let pieces: Vec<Option<Parser>> = pieces(source.text())
         .into_par_iter()
-        .map(|(first, last)| {
+        .map(|piece| {
             let mut parser = Parser::new(source);
-            let state = parser.run_lines(first, last);
+            let state = parser.run_lines(piece.first_line, piece.text);
             let clean = matches!(state, State::TopLevel)
                 && parser.diagnostics.is_empty()
                 && parser.omitted == Omitted::default();
@@ -505,7 +535,7 @@ struct Parser<'s> {
     scene: Scene,
     seen: Seen,
     /// Untextured materials seen so far, by their numbers' bits (see [`Parser::share`]).
-    materials: HashMap<[u64; 12], Arc<Material>>,
+    materials: HashMap<[u64; 12], Arc<Material>, foldhash::fast::FixedState>,
     /// The emptied entry list of the last block read, for the next block to fill (a scene of a
     /// million spheres then allocates no list per block).
     spare_entries: Vec<Entry<'s>>,
@@ -521,7 +551,7 @@ impl<'s> Parser<'s> {
             scratch: Diagnostic::general(Severity::Note, ""),
             scene: Scene::empty(),
             seen: Seen::default(),
-            materials: HashMap::new(),
+            materials: HashMap::default(),
             spare_entries: Vec::new(),
         }
     }
@@ -575,17 +605,16 @@ impl<'s> Parser<'s> {
     }
 
     fn run(&mut self) {
-        let state = self.run_lines(1, self.source.line_count());
+        let state = self.run_lines(1, self.source.text());
         self.finish_file(state);
     }
 
-    /// Reads lines `first..=last` (1-based) from the top level; returns the state after them.
-    fn run_lines(&mut self, first: u32, last: u32) -> State<'s> {
+    /// Reads the lines of `text`, numbered from `first`, from the top level; returns the state
+    /// after them.
+    fn run_lines(&mut self, first: u32, text: &'s str) -> State<'s> {
         let mut state = State::TopLevel;
-        let source = self.source;
         let mut tokens = Vec::new();
-        for number in first..=last {
-            let line = source.line(number);
+        for (number, line) in numbered_lines(first, text) {
             tokenize(line, &mut tokens);
             let Some(first) = tokens.first() else { continue };
             // The common lines first, without moving the state: a key line of an open block, and

@@ -882,8 +882,22 @@ fn parse_line_by_line(text: &str) -> Result<Parsed, SceneError> {
 
 #[test]
 fn large_files_parsed_in_pieces_give_the_scene_of_one_pass() {
-    // 20,000 spheres: 160,000 lines, three pieces; the camera block in the second.
+    // 20,000 spheres: 160,000 lines, 1.6 MB, four pieces; the camera block in the second.
     let text = many_spheres(20_000, 12_000, usize::MAX, "");
+    let cut = pieces(&text);
+    assert_eq!(cut.len(), 4);
+    // The pieces are the file's lines, in order, numbered as in the file, each but the first
+    // starting with a block.
+    let mut joined = String::new();
+    for (i, piece) in cut.iter().enumerate() {
+        assert_eq!(joined.lines().count() as u32 + 1, piece.first_line);
+        if i > 0 {
+            assert!(piece.text.starts_with("primitive sphere\n"), "{}", &piece.text[..40]);
+            joined.push('\n');
+        }
+        joined.push_str(piece.text);
+    }
+    assert_eq!(joined, text);
     let pieces = parse_in_pieces(&source(&text)).expect("a clean file is parsed in pieces");
     let whole = parse_line_by_line(&text).expect("valid");
     assert!(whole.diagnostics.is_empty());
@@ -891,16 +905,36 @@ fn large_files_parsed_in_pieces_give_the_scene_of_one_pass() {
     assert_eq!(pieces.scene.camera.image_width, 64);
     // Equal materials are shared within each piece (each piece keeps its own copies, so that
     // the threads do not contend for their reference counts): three materials in each of the
-    // three pieces.
+    // four pieces.
     let mut distinct: Vec<*const Material> = Vec::new();
     for p in &pieces.scene.primitives {
         if !distinct.contains(&Arc::as_ptr(&p.material)) {
             distinct.push(Arc::as_ptr(&p.material));
         }
     }
-    assert_eq!(distinct.len(), 9);
+    assert_eq!(distinct.len(), 12);
     // Small files are not cut.
     assert!(parse_in_pieces(&source(&many_spheres(100, 0, usize::MAX, ""))).is_none());
+}
+
+#[test]
+fn pieces_start_at_blocks_and_keep_crlf_line_numbers() {
+    // One block of a million key lines and then a sphere: the only line opening a block past
+    // the first piece's size is the sphere's, so there are two pieces.
+    let mut text = String::from("camera\r\n");
+    for _ in 0..100_000 {
+        text.push_str(" O= 0 -9 0\r\n");
+    }
+    text.push_str("end\r\nprimitive sphere\r\n O= 0 0 0\r\n R= 1\r\nend\r\n");
+    let cut = pieces(&text);
+    assert_eq!(cut.len(), 2);
+    assert_eq!(cut[1].first_line, 100_003);
+    assert!(cut[1].text.starts_with("primitive sphere\r\n"));
+    assert_eq!(source(&text).line(100_003), "primitive sphere");
+    // A file with no line past the first piece's size that opens a block is one piece.
+    let text = format!("camera\n{}end\n", " O= 0 -9 0\n".repeat(100_000));
+    let cut = pieces(&text);
+    assert!(cut.len() == 1 && cut[0].first_line == 1 && cut[0].text == text);
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! Scene file text: decoding (UTF-8 or GBK) and positions in it.
 
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use super::diagnostic::{Diagnostic, Location, Severity};
 
@@ -23,7 +24,9 @@ pub struct SourceFile {
     name: String,
     dir: Option<PathBuf>,
     text: String,
-    line_starts: Vec<usize>,
+    /// The byte offset of each line's start, made when first needed: a clean file read in pieces
+    /// never needs it (see [`crate::scene::parse`]), a diagnostic's position does.
+    line_starts: OnceLock<Vec<usize>>,
 }
 
 /// Largest scene file read, in bytes (512 MiB, about five million spheres of about 100 bytes of
@@ -121,12 +124,18 @@ impl SourceFile {
 
     /// Wraps scene text that is already decoded.
     pub fn from_text(name: impl Into<String>, dir: Option<PathBuf>, text: String) -> SourceFile {
-        // Counted first, so that a file of millions of lines fills one list of the right size.
-        let ends = memchr::memchr_iter(b'\n', text.as_bytes());
-        let mut line_starts = Vec::with_capacity(1 + ends.count());
-        line_starts.push(0);
-        line_starts.extend(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1));
-        SourceFile { name: name.into(), dir, text, line_starts }
+        SourceFile { name: name.into(), dir, text, line_starts: OnceLock::new() }
+    }
+
+    /// The byte offset of each line's start.
+    fn line_starts(&self) -> &[usize] {
+        self.line_starts.get_or_init(|| {
+            // Counted first, so that a file of millions of lines fills one list of the right size.
+            let mut starts = Vec::with_capacity(1 + count_line_ends(&self.text));
+            starts.push(0);
+            starts.extend(memchr::memchr_iter(b'\n', self.text.as_bytes()).map(|i| i + 1));
+            starts
+        })
     }
 
     /// The name used in messages (normally the path as given).
@@ -146,23 +155,23 @@ impl SourceFile {
 
     /// The lines of the text with their 1-based numbers, without line ends (`\n` or `\r\n`).
     pub fn lines(&self) -> impl Iterator<Item = (u32, &str)> {
-        (0..self.line_starts.len()).map(|i| (i as u32 + 1, self.line(i as u32 + 1)))
+        numbered_lines(1, &self.text)
     }
 
     /// The number of lines (a final line end starts an empty last line).
     pub fn line_count(&self) -> u32 {
-        self.line_starts.len() as u32
+        self.line_starts().len() as u32
     }
 
     /// The text of 1-based line `number`, without its line end (empty past the end).
     pub fn line(&self, number: u32) -> &str {
         let i = number as usize - 1;
-        let Some(&start) = self.line_starts.get(i) else {
+        let starts = self.line_starts();
+        let Some(&start) = starts.get(i) else {
             return "";
         };
-        let end = self.line_starts.get(i + 1).map_or(self.text.len(), |&e| e - 1);
-        let line = &self.text[start..end];
-        line.strip_suffix('\r').unwrap_or(line)
+        let end = starts.get(i + 1).map_or(self.text.len(), |&e| e - 1);
+        without_return(&self.text[start..end])
     }
 
     /// A diagnostic at `span` of this file.
@@ -179,6 +188,30 @@ impl SourceFile {
     pub fn location(&self, span: Span) -> Location {
         Location { file: self.name.clone(), span, line_text: self.line(span.line).to_owned() }
     }
+}
+
+/// The lines of `text` numbered from `first`, without line ends (`\n` or `\r\n`); a final line
+/// end starts an empty last line.
+pub(super) fn numbered_lines(first: u32, text: &str) -> impl Iterator<Item = (u32, &str)> {
+    // The line ends found by `memchr` (vector instructions); `str::split` is slower on lines of
+    // a few bytes.
+    let mut start = 0;
+    let ends = memchr::memchr_iter(b'\n', text.as_bytes()).chain([text.len()]);
+    (first..).zip(ends.map(move |end| {
+        let line = &text[start..end];
+        start = end + 1;
+        without_return(line)
+    }))
+}
+
+/// The number of `\n` in `text`.
+pub(super) fn count_line_ends(text: &str) -> usize {
+    memchr::memchr_iter(b'\n', text.as_bytes()).count()
+}
+
+/// A line without the `\r` of a `\r\n` line end.
+pub(super) fn without_return(line: &str) -> &str {
+    line.strip_suffix('\r').unwrap_or(line)
 }
 
 #[cfg(test)]
