@@ -228,26 +228,28 @@ impl PreparedScene {
             TextureSource::Builtin(_) => None,
         }));
 
-        // Every primitive's box, in parallel. The unbounded ones (planes) get the empty box, which
-        // the BVH leaves out, and are tested one by one; so the BVH's items are the primitives.
-        let mut boxes: Vec<Box32> = scene
-            .primitives
-            .par_iter()
-            .map(|p| p.shape.bounds().map_or(Box32::EMPTY, |b| Box32::from_bounds(&b)))
-            .collect();
-        let mut linear: Vec<u32> = scene
-            .primitives
+        // The unbounded primitives (planes) are tested one by one, and so are all when there are
+        // few bounded ones; the others go into a BVH whose items are the primitives, each with its
+        // box (the unbounded ones get the empty box, which the BVH leaves out).
+        let prims = &scene.primitives;
+        let mut linear: Vec<u32> = prims
             .par_iter()
             .enumerate()
-            .filter(|(_, p)| p.shape.bounds().is_none())
+            .filter(|(_, p)| !p.shape.is_bounded())
             .map(|(i, _)| i as u32)
             .collect();
-        if boxes.len() - linear.len() <= FLAT_LIMIT {
-            linear = (0..boxes.len() as u32).collect();
-            boxes.clear();
-        }
+        let bvh_items = if prims.len() - linear.len() <= FLAT_LIMIT {
+            linear = (0..prims.len() as u32).collect();
+            0
+        } else {
+            prims.len()
+        };
+        let bvh = WideBvh::build_with(
+            bvh_items,
+            |i| prims[i].shape.bounds().map_or(Box32::EMPTY, |b| Box32::from_bounds(&b)),
+            BuildParams::SHAPES,
+        );
         let linear = FlatSet::new(&linear, &scene);
-        let bvh = WideBvh::build(&boxes, BuildParams::SHAPES);
         let emitters = scene
             .lights
             .iter()

@@ -258,14 +258,17 @@ impl TriangleMesh {
         } else {
             tris.iter().map(|t| t.uv).collect()
         };
-        let boxes: Vec<Box32> = positions
-            .iter()
-            .map(|t| {
-                let b = Box32::around(&[pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]]);
-                if corners_degenerate(pos, t) { Box32::EMPTY } else { b }
-            })
-            .collect();
-        let mut bvh = WideBvh::build(&boxes, BuildParams::TRIANGLES);
+        // Each triangle's box, made on the builder's threads; a degenerate triangle's is empty,
+        // which leaves it out.
+        let triangle_box = |i: usize| {
+            let t = &positions[i];
+            if corners_degenerate(pos, t) {
+                Box32::EMPTY
+            } else {
+                Box32::around(&[pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]])
+            }
+        };
+        let mut bvh = WideBvh::build_with(positions.len(), triangle_box, BuildParams::TRIANGLES);
         // Pack each leaf's triangles into packets of four, in leaf order.
         let order = bvh.order().to_vec();
         let mut packets = Vec::with_capacity(order.len() / 3 + 1);

@@ -227,6 +227,16 @@ impl Shape {
         }
     }
 
+    /// Whether the shape has a box around it ([`Shape::bounds`] is `Some`): all but a plane,
+    /// an empty mesh and a mesh file not loaded.
+    pub fn is_bounded(&self) -> bool {
+        match self {
+            Shape::Plane(_) | Shape::MeshFile(_) => false,
+            Shape::Mesh(m) => !m.is_empty(),
+            _ => true,
+        }
+    }
+
     /// An axis-aligned box around the shape, or `None` for an unbounded shape (a plane).
     pub fn bounds(&self) -> Option<Bounds> {
         match self {
