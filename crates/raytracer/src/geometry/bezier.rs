@@ -195,13 +195,7 @@ impl Bezier {
         let local_o = DVec3::new(o.dot(self.seam), o.dot(self.seam2), o.dot(self.axis));
         let d = ray.dir;
         let local_d = DVec3::new(d.dot(self.seam), d.dot(self.seam2), d.dot(self.axis));
-        let eq = RayEquations {
-            a: local_d.x * local_d.x + local_d.y * local_d.y,
-            b: local_o.x * local_d.x + local_o.y * local_d.y,
-            c: local_o.x * local_o.x + local_o.y * local_o.y,
-            oz: local_o.z,
-            dz: local_d.z,
-        };
+        let eq = RayEquations::new(local_o, local_d);
         // Tolerance on the hull boxes: rounding of the local coordinates.
         let pad = 1e-12 * (self.magnitude + o.abs().max_element());
         let mut best: Option<(f64, f64)> = None;
@@ -384,9 +378,30 @@ struct RayEquations {
     c: f64,
     oz: f64,
     dz: f64,
+    /// `rho2` at the ray's closest approach to the axis, `c - b^2 / a` (when `a > 1e-300`).
+    closest: f64,
+    /// Where the closest approach is, `-b / a` (when `a > 0`).
+    t_closest: f64,
 }
 
 impl RayEquations {
+    /// The equations of the ray from `o` along `d`, both in the axis's frame (z along the axis).
+    /// What every hull test of the ray needs is worked out once here (a ray meets up to dozens).
+    fn new(o: DVec3, d: DVec3) -> RayEquations {
+        let a = d.x * d.x + d.y * d.y;
+        let b = o.x * d.x + o.y * d.y;
+        let c = o.x * o.x + o.y * o.y;
+        RayEquations {
+            a,
+            b,
+            c,
+            oz: o.z,
+            dz: d.z,
+            closest: if a > 1e-300 { c - b * b / a } else { 0.0 },
+            t_closest: if a > 0.0 { -b / a } else { f64::NAN },
+        }
+    }
+
     /// The stretches of `(t_min, t_max)` where the ray lies in the annulus slab
     /// `z0 <= h <= z1`, `r0 <= rho <= r1`, each split where `rho` stops falling (so `rho` is
     /// monotone along each).
@@ -431,7 +446,7 @@ impl RayEquations {
         }
         // Split at the closest approach to the axis.
         if self.a > 0.0 {
-            let tc = -self.b / self.a;
+            let tc = self.t_closest;
             if let Some(i) = out.as_slice().iter().position(|&(a, b)| a < tc && tc < b) {
                 let (a, b) = out.items[i];
                 out.items[i] = (a, tc);
@@ -449,8 +464,7 @@ impl RayEquations {
         }
         // The discriminant b^2 - a c, computed as a (limit - distance^2 of the closest approach)
         // to keep its precision for rays far from the axis.
-        let closest = self.c - self.b * self.b / self.a;
-        let disc = self.a * (limit - closest.max(0.0));
+        let disc = self.a * (limit - self.closest.max(0.0));
         if disc < 0.0 {
             return Roots::None;
         }
