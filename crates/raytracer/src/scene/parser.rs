@@ -135,18 +135,20 @@ fn pieces(text: &str) -> Vec<Piece<'_>> {
     let mut starts = vec![0];
     let mut tokens = Vec::new();
     let mut next = PIECE_BYTES;
-    // From the first line starting at or after `next`, the first line that opens a block.
-    'cut: while let Some(end) = bytes.get(next - 1..).and_then(|rest| memchr::memchr(b'\n', rest)) {
-        let mut start = next + end;
-        while start < bytes.len() {
-            let end = memchr::memchr(b'\n', &bytes[start..]).map_or(bytes.len(), |n| start + n);
-            tokenize(super::source::without_return(&text[start..end]), &mut tokens);
+    // The next piece starts at the first line that opens a block among those starting at or
+    // after byte `next` (a line starts after a line end).
+    'cut: while let Some(skip) = bytes.get(next - 1..).and_then(|rest| memchr::memchr(b'\n', rest)) {
+        let mut line_start = next + skip;
+        while line_start < bytes.len() {
+            let line_end =
+                memchr::memchr(b'\n', &bytes[line_start..]).map_or(bytes.len(), |n| line_start + n);
+            tokenize(super::source::without_return(&text[line_start..line_end]), &mut tokens);
             if tokens.first().is_some_and(|t| is_block_keyword(t.text)) {
-                starts.push(start);
-                next = start + PIECE_BYTES;
+                starts.push(line_start);
+                next = line_start + PIECE_BYTES;
                 continue 'cut;
             }
-            start = end + 1;
+            line_start = line_end + 1;
         }
         break;
     }
