@@ -614,17 +614,25 @@ fn build_subtree(
                 (built, local)
             })
             .collect();
-        for (built, local) in parts {
-            let base = nodes.len() as u32;
-            let shift = |r: u32| if r != EMPTY && r & LEAF == 0 { r + base } else { r };
-            nodes.extend(local.into_iter().map(|mut n| {
-                for c in &mut n.child {
-                    *c = shift(*c);
-                }
-                n
-            }));
-            children.push(Built { bounds: built.bounds, reference: shift(built.reference) });
+        // The parts' nodes follow, in order, their node references shifted by where each part
+        // starts; copied on all threads (a known number of nodes is written in place).
+        let shift = |r: u32, base: u32| if r != EMPTY && r & LEAF == 0 { r + base } else { r };
+        let mut bases = Vec::with_capacity(parts.len());
+        let mut base = nodes.len();
+        for (built, local) in &parts {
+            bases.push(base);
+            children.push(Built { bounds: built.bounds, reference: shift(built.reference, base as u32) });
+            base += local.len();
         }
+        let first = nodes.len();
+        nodes.par_extend((first..base).into_par_iter().map(|k| {
+            let part = bases.partition_point(|&b| b <= k) - 1;
+            let mut n = parts[part].1[k - bases[part]].clone();
+            for c in &mut n.child {
+                *c = shift(*c, bases[part] as u32);
+            }
+            n
+        }));
     } else {
         for (off, b, slice) in slices {
             children.push(build_subtree(slice, off, b, nodes, params));
