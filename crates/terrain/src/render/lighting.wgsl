@@ -60,12 +60,20 @@ fn graded_sky(stored: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
     let horizontal_sun = normalize(vec3<f32>(sun.x, 0.0, sun.z) + vec3<f32>(1e-5, 0.0, 0.0));
     let horizontal = normalize(vec3<f32>(direction.x, 0.0, direction.z) + vec3<f32>(1e-5, 0.0, 0.0));
     let toward = 0.5 + 0.5 * dot(horizontal, horizontal_sun);
-    let low = pow(1.0 - clamp(direction.y, 0.0, 1.0), 3.0);
+    let above = 1.0 - clamp(direction.y, 0.0, 1.0);
+    let low = above * above * above;
     let warmth = sunset * low * toward * toward;
     let sun_colour = scene.sun_colour.rgb / max(max(scene.sun_colour.r, scene.sun_colour.g), max(scene.sun_colour.b, 1e-3));
     colour = mix(colour, sun_colour * (0.55 + 0.45 * daylight()), 0.75 * warmth);
     // The sun's glow and disc.
-    let glow = 0.25 * pow(facing, 8.0) + 0.5 * pow(facing, 64.0) + smoothstep(0.9993, 0.9997, facing);
+    // facing^8 and facing^64 by squaring: pow is exp2 and log2, which a software GPU works out
+    // as polynomials several times the cost of these products.
+    let facing2 = facing * facing;
+    let facing4 = facing2 * facing2;
+    let facing8 = facing4 * facing4;
+    let facing16 = facing8 * facing8;
+    let facing32 = facing16 * facing16;
+    let glow = 0.25 * facing8 + 0.5 * facing32 * facing32 + smoothstep(0.9993, 0.9997, facing);
     colour = mix(colour, sun_colour, min(glow, 1.0) * step(-0.02, sun.y + 0.02));
     return colour;
 }

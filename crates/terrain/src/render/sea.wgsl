@@ -63,7 +63,10 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     let slope = (a.rg + b.rg - vec2<f32>(1.0)) * 2.0 * strength;
     let normal = normalize(vec3<f32>(-slope.x, 1.0, -slope.y));
     let facing = max(dot(normal, view), 0.0);
-    let fresnel = F0 + (1.0 - F0) * pow(1.0 - facing, 5.0);
+    // Schlick's (1 - cos)^5 as products (pow would be exp2 and log2).
+    let grazing = 1.0 - facing;
+    let grazing2 = grazing * grazing;
+    let fresnel = F0 + (1.0 - F0) * grazing2 * grazing2 * grazing;
     let shade = daylight();
 
     // What the surface reflects: the mirrored world (distorted by the waves) or the sky.
@@ -103,7 +106,9 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
         let sun = scene.sun_direction.xyz;
         let half_vector = normalize(sun + view);
         let highlight = max(dot(normal, half_vector), 0.0);
-        let glint = pow(highlight, 700.0) * 6.0 + pow(highlight, 90.0) * 0.25;
+        // Two powers of the highlight from one logarithm (pow takes one each).
+        let log_highlight = log2(highlight);
+        let glint = exp2(700.0 * log_highlight) * 6.0 + exp2(90.0 * log_highlight) * 0.25;
         if (glint > 1e-3) {
             colour += scene.sun_colour.rgb * glint * sunlight(in.world, vec3<f32>(0.0, 1.0, 0.0)) * step(0.0, sun.y);
         }
