@@ -67,9 +67,7 @@ fn fs_bake(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
         grid.origin.y + f32(centre.y) * grid.cell,
     );
     let shadow = soft_sunlight(point, normal);
-    var sun = max(dot(normal, scene.sun_direction.xyz), 0.0);
-    if (bake.shadows != 0u) {
-        sun *= shadow;
-    }
+    // A select, not a branch on the uniform (see `lighting.wgsl`).
+    let sun = max(dot(normal, scene.sun_direction.xyz), 0.0) * select(1.0, shadow, bake.shadows != 0u);
     return vec4<f32>(sun, normal.y, 0.0, 1.0);
 }

@@ -2,6 +2,12 @@
 // World convention: y-up, the water is the plane y = 0. Colours are stored values (no sRGB
 // decoding, as the course's textures are used); lighting is computed on their squares (a gamma
 // of 2) and encoded back with a square root.
+//
+// No branch of these shaders depends on uniforms alone: Mesa 22's lavapipe inlines the values of
+// such uniforms into the shader and compiles it again whenever its pipeline is bound, which cost
+// 3-4 ms a frame. Switches are `select`s where both sides are cheap, and flat varyings set by the
+// vertex stage where a branch saves work (`sea.wgsl`). `a && b` is such a branch too when `a` is
+// a uniform's test (naga keeps WGSL's short circuit as an `if`). `uniform_branches.rs` checks it.
 
 struct Scene {
     // Toward the sun (unit), w: 1 when the land is lit (0: the colour map as it is).
@@ -133,20 +139,17 @@ fn horizon_colour(eye: vec3<f32>, point: vec3<f32>) -> vec3<f32> {
 // as the point nears the sky box's walls (so the world meets the sky without a seam).
 // `path_length` is the distance light travels (longer than |point - eye| for a reflection).
 fn fog_amount(eye: vec3<f32>, point: vec3<f32>, path_length: f32) -> f32 {
-    var amount = 0.0;
-    if (scene.fog.z > 0.5) {
-        let a = scene.fog.x;
-        let b = max(scene.fog.y, 1e-4);
-        let y0 = max(eye.y, 0.0);
-        let y1 = max(point.y, 0.0);
-        let dy = y1 - y0;
-        // The integral of a exp(-b y) along the path, divided by its length.
-        var mean_density = a * exp(-b * y0);
-        if (abs(dy) > 1e-3) {
-            mean_density = a * (exp(-b * y0) - exp(-b * y1)) / (b * dy);
-        }
-        amount = 1.0 - exp(-mean_density * path_length);
+    let a = scene.fog.x;
+    let b = max(scene.fog.y, 1e-4);
+    let y0 = max(eye.y, 0.0);
+    let y1 = max(point.y, 0.0);
+    let dy = y1 - y0;
+    // The integral of a exp(-b y) along the path, divided by its length.
+    var mean_density = a * exp(-b * y0);
+    if (abs(dy) > 1e-3) {
+        mean_density = a * (exp(-b * y0) - exp(-b * y1)) / (b * dy);
     }
+    var amount = select(0.0, 1.0 - exp(-mean_density * path_length), scene.fog.z > 0.5);
     // Where the walls are in this direction, and how far along the point is.
     let half_size = scene.sky_box.xz;
     let ray = point.xz - eye.xz;
@@ -176,12 +179,10 @@ fn sunlight(point: vec3<f32>, normal: vec3<f32>) -> f32 {
 // light on it, with shadows, and how much of the sky it faces; see `bake.wgsl`); returns stored
 // values.
 fn lit_surface(albedo: vec3<f32>, light: vec2<f32>) -> vec3<f32> {
-    if (scene.sun_direction.w < 0.5) {
-        return albedo;
-    }
     // Sky light from above, a little bounce from the ground below.
     let sky = scene.sky_light.rgb * (0.6 + 0.4 * light.y);
-    return to_stored(to_linear(albedo) * (scene.sun_colour.rgb * light.x + sky));
+    let lit = to_stored(to_linear(albedo) * (scene.sun_colour.rgb * light.x + sky));
+    return select(albedo, lit, scene.sun_direction.w > 0.5);
 }
 
 // The aerial perspective of `point` seen from `eye`: the horizon's colour in its direction (rgb)

@@ -20,6 +20,8 @@ mod shadow;
 mod sky;
 mod surface;
 mod texture;
+#[cfg(test)]
+mod uniform_branches;
 mod uniforms;
 mod water;
 

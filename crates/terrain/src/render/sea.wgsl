@@ -18,7 +18,17 @@ struct SeaVertex {
     @location(0) world: vec3<f32>,
     // The horizon's colour and the fog's amount (see `aerial`).
     @location(1) aerial: vec4<f32>,
+    // The water's switches (`REFLECT_LAND`...), the same at every vertex. They come from the
+    // vertex stage so that no branch of the fragment stage depends on uniforms alone (see
+    // `lighting.wgsl`; `&` rather than `&&` below, which naga turns into such a branch).
+    @location(2) @interpolate(flat) switches: u32,
 }
+
+// The water's switches.
+const REFLECT_LAND: u32 = 1u;
+const SEA_FLOOR: u32 = 2u;
+const GLINT: u32 = 4u;
+const FOAM: u32 = 8u;
 
 @vertex
 fn vs_main(@location(0) position: vec3<f32>) -> SeaVertex {
@@ -26,6 +36,10 @@ fn vs_main(@location(0) position: vec3<f32>) -> SeaVertex {
     out.clip = to_clip(position);
     out.world = position;
     out.aerial = aerial(frame.eye.xyz, position, length(position - frame.eye.xyz));
+    out.switches = select(0u, REFLECT_LAND, scene.water_flags.y > 0.5)
+        | select(0u, SEA_FLOOR, scene.wave_params.z > 0.5)
+        | select(0u, GLINT, (scene.wave_params.w > 0.5) & (scene.sun_direction.w > 0.5))
+        | select(0u, FOAM, scene.water_flags.x > 0.5);
     return out;
 }
 
@@ -72,7 +86,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     // What the surface reflects: the mirrored world (distorted by the waves) or the sky.
     var reflected: vec3<f32>;
     let size = scene.water_flags.zw;
-    if (scene.water_flags.y > 0.5) {
+    if ((in.switches & REFLECT_LAND) != 0u) {
         let uv = in.clip.xy / size + normal.xz * vec2<f32>(0.06, 0.06) / (1.0 + 0.15 * distance);
         reflected = textureSampleLevel(reflection, edge_clamp, clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)), 0.0).rgb;
     } else {
@@ -83,7 +97,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     let water = scene.water_colour.rgb * shade;
     var below = water;
     let depth = -floor_height(in.world.xz);
-    if (scene.wave_params.z > 0.5 && depth < 8.0 * scene.water_colour.w) {
+    if ((in.switches & SEA_FLOOR) != 0u && depth < 8.0 * scene.water_colour.w) {
         let down = refract(-view, normal, 1.0 / 1.33);
         let step_down = down / max(-down.y, 0.05);
         // Follow the refracted ray to the depth under the surface point, then to the depth
@@ -102,7 +116,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     var colour = mix(below, reflected, fresnel);
 
     // The sun's glint: a sharp highlight of the waves' facets toward the sun.
-    if (scene.wave_params.w > 0.5 && scene.sun_direction.w > 0.5) {
+    if ((in.switches & GLINT) != 0u) {
         let sun = scene.sun_direction.xyz;
         let half_vector = normalize(sun + view);
         let highlight = max(dot(normal, half_vector), 0.0);
@@ -115,7 +129,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
     }
 
     // Foam where the water is shallow, broken up by the wave maps' foam channel.
-    if (scene.water_flags.x > 0.5 && depth > -0.02) {
+    if ((in.switches & FOAM) != 0u && depth > -0.02) {
         let shore = 1.0 - smoothstep(0.0, 0.06, depth);
         let pattern = smoothstep(0.5, 0.85, (a.b + b.b) * 0.5 + 0.3 * shore);
         let foam = clamp(shore * pattern * 1.5, 0.0, 1.0);

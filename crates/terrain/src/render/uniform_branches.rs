@@ -1,0 +1,130 @@
+//! Every shader of the terrain keeps its branches off conditions that read uniforms alone.
+//!
+//! Mesa 22's lavapipe (the software GPU this project is measured on) looks for `if`s whose
+//! condition depends only on uniform values, inlines those values into the shader and compiles
+//! it again each time its pipeline is bound: 3-4 ms a frame when the water's switches were such
+//! branches. The shaders use `select`s or flat varyings instead (see `lighting.wgsl`); this test
+//! parses every program as its pipeline builds it and fails on any such branch.
+
+use naga::{AddressSpace, Block, Expression, Function, Handle, Module, Statement};
+
+use super::pipeline::shader_source;
+
+/// Every program the renderer builds, as its pipeline concatenates it.
+const PROGRAMS: [(&str, &str); 9] = [
+    ("course land", shader_source!("land.wgsl")),
+    ("course sky", shader_source!("sky.wgsl")),
+    ("course water", shader_source!("water.wgsl")),
+    ("course grid", shader_source!("heights.wgsl", "grid.wgsl", "grid_course.wgsl")),
+    ("shadow map", shader_source!("heights.wgsl", "grid.wgsl")),
+    ("light map", shader_source!("lighting.wgsl", "heights.wgsl", "bake.wgsl")),
+    ("modern land", shader_source!("lighting.wgsl", "heights.wgsl", "grid.wgsl", "grid_modern.wgsl")),
+    ("modern sky", shader_source!("lighting.wgsl", "sky.wgsl", "sky_modern.wgsl")),
+    ("sea", shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl")),
+];
+
+/// What an expression's value depends on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Source {
+    /// Constants alone.
+    Constant,
+    /// Uniforms (and constants).
+    Uniform,
+    /// Anything that may differ between invocations, or that this check does not follow
+    /// (function arguments, local variables, textures, calls).
+    Varying,
+}
+
+fn source_of(module: &Module, function: &Function, expression: Handle<Expression>) -> Source {
+    let of = |e: Handle<Expression>| source_of(module, function, e);
+    let all = |list: &[Handle<Expression>]| list.iter().map(|&e| of(e)).max().unwrap_or(Source::Constant);
+    match function.expressions[expression] {
+        Expression::Literal(_) | Expression::Constant(_) | Expression::Override(_) | Expression::ZeroValue(_) => {
+            Source::Constant
+        }
+        Expression::GlobalVariable(global) => match module.global_variables[global].space {
+            AddressSpace::Uniform => Source::Uniform,
+            _ => Source::Varying,
+        },
+        Expression::Load { pointer } => of(pointer),
+        Expression::Access { base, index } => all(&[base, index]),
+        Expression::AccessIndex { base, .. } => of(base),
+        Expression::Splat { value, .. } => of(value),
+        Expression::Swizzle { vector, .. } => of(vector),
+        Expression::Unary { expr, .. } | Expression::As { expr, .. } => of(expr),
+        Expression::Relational { argument, .. } => of(argument),
+        Expression::Binary { left, right, .. } => all(&[left, right]),
+        Expression::Select { condition, accept, reject } => all(&[condition, accept, reject]),
+        Expression::Compose { ref components, .. } => all(components),
+        Expression::Math { arg, arg1, arg2, arg3, .. } => {
+            let args: Vec<_> = [Some(arg), arg1, arg2, arg3].into_iter().flatten().collect();
+            all(&args)
+        }
+        _ => Source::Varying,
+    }
+}
+
+/// The names of the functions in `block` (and the blocks inside it) that branch on uniforms
+/// alone.
+fn uniform_branches(module: &Module, function: &Function, block: &Block, found: &mut Vec<String>) {
+    for statement in block.iter() {
+        match statement {
+            Statement::If { condition, accept, reject } => {
+                if source_of(module, function, *condition) == Source::Uniform {
+                    found.push(function.name.clone().unwrap_or_default());
+                }
+                uniform_branches(module, function, accept, found);
+                uniform_branches(module, function, reject, found);
+            }
+            Statement::Switch { selector, cases } => {
+                if source_of(module, function, *selector) == Source::Uniform {
+                    found.push(function.name.clone().unwrap_or_default());
+                }
+                for case in cases {
+                    uniform_branches(module, function, &case.body, found);
+                }
+            }
+            Statement::Loop { body, continuing, .. } => {
+                uniform_branches(module, function, body, found);
+                uniform_branches(module, function, continuing, found);
+            }
+            Statement::Block(inner) => uniform_branches(module, function, inner, found),
+            _ => {}
+        }
+    }
+}
+
+fn branches_on_uniforms(source: &str) -> Vec<String> {
+    let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|error| panic!("{}", error.emit_to_string(source)));
+    let mut found = Vec::new();
+    let functions = module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function));
+    for function in functions {
+        uniform_branches(&module, function, &function.body, &mut found);
+    }
+    found
+}
+
+#[test]
+fn no_program_branches_on_uniforms_alone() {
+    for (name, source) in PROGRAMS {
+        let found = branches_on_uniforms(source);
+        assert!(found.is_empty(), "the {name} program branches on uniforms alone in {found:?}");
+    }
+}
+
+#[test]
+fn the_check_finds_such_branches() {
+    let source = "struct S { on: f32, x: f32 }
+        @group(0) @binding(0) var<uniform> s: S;
+        fn lit(v: f32) -> f32 {
+            if (s.on > 0.5 && s.x < 2.0) { return v * 2.0; }
+            if (v > s.x) { return v; }
+            return select(v, 0.0, s.on > 0.5);
+        }
+        @fragment fn main(@location(0) v: f32) -> @location(0) vec4<f32> {
+            var y = lit(v);
+            if (s.x > 1.0) { y = 0.0; }
+            return vec4<f32>(y);
+        }";
+    assert_eq!(branches_on_uniforms(source), ["lit", "main"]);
+}
