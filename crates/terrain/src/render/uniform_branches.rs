@@ -39,9 +39,10 @@ fn source_of(module: &Module, function: &Function, expression: Handle<Expression
     let of = |e: Handle<Expression>| source_of(module, function, e);
     let all = |list: &[Handle<Expression>]| list.iter().map(|&e| of(e)).max().unwrap_or(Source::Constant);
     match function.expressions[expression] {
-        Expression::Literal(_) | Expression::Constant(_) | Expression::Override(_) | Expression::ZeroValue(_) => {
-            Source::Constant
-        }
+        Expression::Literal(_)
+        | Expression::Constant(_)
+        | Expression::Override(_)
+        | Expression::ZeroValue(_) => Source::Constant,
         Expression::GlobalVariable(global) => match module.global_variables[global].space {
             AddressSpace::Uniform => Source::Uniform,
             _ => Source::Varying,
@@ -95,9 +96,11 @@ fn uniform_branches(module: &Module, function: &Function, block: &Block, found: 
 }
 
 fn branches_on_uniforms(source: &str) -> Vec<String> {
-    let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|error| panic!("{}", error.emit_to_string(source)));
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|error| panic!("{}", error.emit_to_string(source)));
     let mut found = Vec::new();
-    let functions = module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function));
+    let functions =
+        module.functions.iter().map(|(_, f)| f).chain(module.entry_points.iter().map(|e| &e.function));
     for function in functions {
         uniform_branches(&module, function, &function.body, &mut found);
     }
