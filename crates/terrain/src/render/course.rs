@@ -12,6 +12,10 @@ use super::{RenderError, Renderer};
 use crate::config::SceneConfig;
 use crate::world::World;
 
+/// The course look's land on maps too large for its mesh (the grid): the WGSL source its
+/// pipeline is built from.
+pub(super) const GRID_SHADER: &str = shader_source!("heights.wgsl", "grid.wgsl", "grid_course.wgsl");
+
 /// Largest heightmap side drawn as the static mesh in the course's look. Its memory grows with
 /// the map (about 40 bytes a sample); larger maps use the grid, whose picture differs from the
 /// mesh's by the rounding of its 16-bit heights and its levels of detail.
@@ -115,12 +119,11 @@ fn grid_pipelines(
 ) -> PipelinePair {
     let buffers = GridTerrain::buffer_layouts();
     let layouts = [layout];
-    let source = shader_source!("heights.wgsl", "grid.wgsl", "grid_course.wgsl");
     pipelines(
         context,
         &PipelineSpec {
             polygon_mode,
-            ..PipelineSpec::new("land (course, grid)", source, &layouts, &buffers)
+            ..PipelineSpec::new("land (course, grid)", GRID_SHADER, &layouts, &buffers)
         },
     )
 }

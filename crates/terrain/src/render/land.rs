@@ -14,6 +14,9 @@ use crate::config::SceneConfig;
 use crate::world::mesh::{DrawRange, EDGE_COUNT, LodView};
 use crate::world::{Heightfield, TerrainMesh, World};
 
+/// The course look's land mesh: the WGSL source its pipeline is built from.
+pub(super) const SHADER: &str = shader_source!("land.wgsl");
+
 /// Bytes of one indirect draw's arguments.
 const INDIRECT_ARGS_SIZE: u64 = size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
 
@@ -46,10 +49,7 @@ fn land_pipelines(
     let layouts = [layout];
     pipelines(
         context,
-        &PipelineSpec {
-            polygon_mode,
-            ..PipelineSpec::new("land", shader_source!("land.wgsl"), &layouts, &buffers)
-        },
+        &PipelineSpec { polygon_mode, ..PipelineSpec::new("land", SHADER, &layouts, &buffers) },
     )
 }
 

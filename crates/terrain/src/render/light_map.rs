@@ -10,6 +10,9 @@ use wgpu::util::DeviceExt;
 use super::grid::GridTerrain;
 use super::pipeline::{Binding, PassContext, PipelineSpec, bind_group, pipeline, shader_source};
 
+/// The light map's program: the WGSL source its pipeline is built from.
+pub(super) const SHADER: &str = shader_source!("lighting.wgsl", "heights.wgsl", "bake.wgsl");
+
 /// Format of the light map: the sun's light (r) and the sky's (g).
 pub const LIGHT_MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
 
@@ -115,12 +118,7 @@ impl LightMap {
             vertex_entry: "vs_bake",
             fragment_entry: Some("fs_bake"),
             depth: false,
-            ..PipelineSpec::new(
-                "light map",
-                shader_source!("lighting.wgsl", "heights.wgsl", "bake.wgsl"),
-                &layouts,
-                &[],
-            )
+            ..PipelineSpec::new("light map", SHADER, &layouts, &[])
         };
         Self {
             view: texture.create_view(&wgpu::TextureViewDescriptor::default()),

@@ -18,6 +18,10 @@ use crate::config::SceneConfig;
 use crate::settings::Settings;
 use crate::world::World;
 
+/// The modern look's land (the grid, lit): the WGSL source its pipeline is built from.
+pub(super) const LAND_SHADER: &str =
+    shader_source!("lighting.wgsl", "heights.wgsl", "grid.wgsl", "grid_modern.wgsl");
+
 /// The modern look's GPU resources (the grid is the renderer's).
 #[derive(Debug)]
 pub struct ModernLook {
@@ -133,11 +137,10 @@ fn land_pipelines(
 ) -> [wgpu::RenderPipeline; 2] {
     let buffers = GridTerrain::buffer_layouts();
     let layouts = [layout, lighting];
-    let source = shader_source!("lighting.wgsl", "heights.wgsl", "grid.wgsl", "grid_modern.wgsl");
     let spec = PipelineSpec {
         polygon_mode,
         vertex_entry: "vs_lit",
-        ..PipelineSpec::new("land (modern)", source, &layouts, &buffers)
+        ..PipelineSpec::new("land (modern)", LAND_SHADER, &layouts, &buffers)
     };
     let reflected = PipelineSpec { fragment_entry: Some("fs_reflected"), ..spec };
     let reflection_context = PassContext { target_format: REFLECTION_FORMAT, ..*context };

@@ -12,6 +12,9 @@ use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
 use crate::world::procedural::{WAVE_MAP_SIZE, wave_map};
 
+/// The modern look's water: the WGSL source its pipeline is built from.
+pub(super) const SHADER: &str = shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl");
+
 /// Seeds of the two wave maps (the same for every world).
 const WAVE_SEEDS: [u32; 2] = [11, 12];
 
@@ -73,12 +76,7 @@ impl SeaPass {
             attributes: &attributes,
         }];
         let layouts = [&layout, lighting.0];
-        let spec = PipelineSpec::new(
-            "sea",
-            shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl"),
-            &layouts,
-            &buffers,
-        );
+        let spec = PipelineSpec::new("sea", SHADER, &layouts, &buffers);
         let (positions, indices) = sea_mesh(config);
         Ok(Self {
             pipeline: pipeline(context, &spec, false),

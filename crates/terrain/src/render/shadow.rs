@@ -4,6 +4,9 @@
 use super::grid::{GridPass, GridTerrain};
 use super::pipeline::{PassContext, PipelineSpec, pipeline, shader_source};
 
+/// The shadow map's program (the grid seen from the sun, depth only): the WGSL source its pipeline is built from.
+pub(super) const SHADER: &str = shader_source!("heights.wgsl", "grid.wgsl");
+
 /// The depth-only pipeline that draws the grid from the sun.
 #[derive(Debug)]
 pub struct ShadowPass {
@@ -19,7 +22,7 @@ impl ShadowPass {
             fragment_entry: None,
             // Slope-scaled bias against shadow acne on slopes lit at a grazing angle.
             depth_bias: wgpu::DepthBiasState { constant: 2, slope_scale: 2.0, clamp: 0.0 },
-            ..PipelineSpec::new("shadow", shader_source!("heights.wgsl", "grid.wgsl"), &layouts, &buffers)
+            ..PipelineSpec::new("shadow", SHADER, &layouts, &buffers)
         };
         Self { pipeline: pipeline(context, &spec, false) }
     }

@@ -12,6 +12,12 @@ use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
 use crate::world::{SkyBox, SkyFace};
 
+/// The course's sky box: the WGSL source its pipeline is built from.
+pub(super) const COURSE_SHADER: &str = shader_source!("sky.wgsl");
+
+/// The modern look's sky box, graded for the sun: the WGSL source its pipeline is built from.
+pub(super) const MODERN_SHADER: &str = shader_source!("lighting.wgsl", "sky.wgsl", "sky_modern.wgsl");
+
 /// A corner of a sky face.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -71,8 +77,7 @@ pub struct SkyPass {
 impl SkyPass {
     /// The course's sky box: `faces` as they are, on the box of `config`.
     pub fn new(context: &PassContext<'_>, faces: &SkyFaces, config: &SceneConfig) -> Self {
-        let source = shader_source!("sky.wgsl");
-        Self::build(context, context, faces, config, source, ("vs_main", "fs_main"), None)
+        Self::build(context, context, faces, config, COURSE_SHADER, ("vs_main", "fs_main"), None)
     }
 
     /// The modern look's sky box: `faces` graded for the sun by `lighting` (group 2, with its
@@ -84,8 +89,15 @@ impl SkyPass {
         config: &SceneConfig,
         lighting: (&wgpu::BindGroupLayout, &wgpu::BindGroup),
     ) -> Self {
-        let source = shader_source!("lighting.wgsl", "sky.wgsl", "sky_modern.wgsl");
-        Self::build(context, reflection, faces, config, source, ("vs_modern", "fs_modern"), Some(lighting))
+        Self::build(
+            context,
+            reflection,
+            faces,
+            config,
+            MODERN_SHADER,
+            ("vs_modern", "fs_modern"),
+            Some(lighting),
+        )
     }
 
     fn build(

@@ -8,19 +8,17 @@
 
 use naga::{AddressSpace, Block, Expression, Function, Handle, Module, Statement};
 
-use super::pipeline::shader_source;
-
-/// Every program the renderer builds, as its pipeline concatenates it.
+/// Every program the renderer builds, as its pipeline is built from it.
 const PROGRAMS: [(&str, &str); 9] = [
-    ("course land", shader_source!("land.wgsl")),
-    ("course sky", shader_source!("sky.wgsl")),
-    ("course water", shader_source!("water.wgsl")),
-    ("course grid", shader_source!("heights.wgsl", "grid.wgsl", "grid_course.wgsl")),
-    ("shadow map", shader_source!("heights.wgsl", "grid.wgsl")),
-    ("light map", shader_source!("lighting.wgsl", "heights.wgsl", "bake.wgsl")),
-    ("modern land", shader_source!("lighting.wgsl", "heights.wgsl", "grid.wgsl", "grid_modern.wgsl")),
-    ("modern sky", shader_source!("lighting.wgsl", "sky.wgsl", "sky_modern.wgsl")),
-    ("sea", shader_source!("lighting.wgsl", "heights.wgsl", "sea.wgsl")),
+    ("course land", super::land::SHADER),
+    ("course sky", super::sky::COURSE_SHADER),
+    ("course water", super::water::SHADER),
+    ("course grid", super::course::GRID_SHADER),
+    ("shadow map", super::shadow::SHADER),
+    ("light map", super::light_map::SHADER),
+    ("modern land", super::modern::LAND_SHADER),
+    ("modern sky", super::sky::MODERN_SHADER),
+    ("sea", super::sea::SHADER),
 ];
 
 /// What an expression's value depends on.

@@ -11,6 +11,9 @@ use super::pipeline::{
 use super::texture::{sampler, upload};
 use crate::config::SceneConfig;
 
+/// The course's water: the WGSL source its pipeline is built from.
+pub(super) const SHADER: &str = shader_source!("water.wgsl");
+
 /// A corner of the water plane: its position and its texture coordinates.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
@@ -71,7 +74,7 @@ impl WaterPass {
             &PipelineSpec {
                 topology: wgpu::PrimitiveTopology::TriangleStrip,
                 blend: true,
-                ..PipelineSpec::new("water", shader_source!("water.wgsl"), &[&layout], &buffers)
+                ..PipelineSpec::new("water", SHADER, &[&layout], &buffers)
             },
         );
         Ok(Self {
