@@ -169,6 +169,7 @@ fn parse_time(text: &str) -> Result<f64, String> {
 
 /// Runs `rayterra terrain`.
 pub fn run(args: TerrainArgs) -> Result<(), ExitCode> {
+    terrain::heap::keep_freed_memory();
     execute(args).map_err(|message| {
         eprintln!("error: {message}");
         ExitCode::FAILURE

@@ -32,6 +32,8 @@ const ROUNDS: usize = 6;
 const FRAMES_PER_ROUND: usize = 4;
 
 fn main() {
+    // As `rayterra terrain` does, so that the frames measured are the ones users get.
+    terrain::heap::keep_freed_memory();
     let backend: Backend = std::env::var("RAYTERRA_BENCH_BACKEND")
         .map(|name| name.parse().unwrap_or_else(|error| panic!("RAYTERRA_BENCH_BACKEND: {error}")))
         .unwrap_or(Backend::Vulkan);

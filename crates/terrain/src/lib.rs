@@ -23,6 +23,7 @@ pub mod camera;
 pub mod config;
 pub mod controls;
 pub mod headless;
+pub mod heap;
 pub mod output;
 pub mod overlay;
 pub mod panel;
