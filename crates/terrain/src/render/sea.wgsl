@@ -120,8 +120,9 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
         let sun = scene.sun_direction.xyz;
         let half_vector = normalize(sun + view);
         let highlight = max(dot(normal, half_vector), 0.0);
-        // Two powers of the highlight from one logarithm (pow takes one each).
-        let log_highlight = log2(highlight);
+        // Two powers of the highlight from one logarithm (pow takes one each); kept off log2(0),
+        // which WGSL leaves undefined (both powers are 0 there to the last bit anyway).
+        let log_highlight = log2(max(highlight, 1e-6));
         let glint = exp2(700.0 * log_highlight) * 6.0 + exp2(90.0 * log_highlight) * 0.25;
         if (glint > 1e-3) {
             colour += scene.sun_colour.rgb * glint * sunlight(in.world, vec3<f32>(0.0, 1.0, 0.0)) * step(0.0, sun.y);
