@@ -83,7 +83,11 @@ fn uniform_branches(module: &Module, function: &Function, block: &Block, found: 
                     uniform_branches(module, function, &case.body, found);
                 }
             }
-            Statement::Loop { body, continuing, .. } => {
+            Statement::Loop { body, continuing, break_if } => {
+                // A loop's exit test counts as a branch too (lavapipe inlines those as well).
+                if break_if.is_some_and(|test| source_of(module, function, test) == Source::Uniform) {
+                    found.push(function.name.clone().unwrap_or_default());
+                }
                 uniform_branches(module, function, body, found);
                 uniform_branches(module, function, continuing, found);
             }
@@ -122,10 +126,18 @@ fn the_check_finds_such_branches() {
             if (v > s.x) { return v; }
             return select(v, 0.0, s.on > 0.5);
         }
+        fn spin(v: f32) -> f32 {
+            var y = v;
+            loop {
+                y = y * 0.5;
+                continuing { break if s.x > 1.0; }
+            }
+            return y;
+        }
         @fragment fn main(@location(0) v: f32) -> @location(0) vec4<f32> {
-            var y = lit(v);
+            var y = lit(v) + spin(v);
             if (s.x > 1.0) { y = 0.0; }
             return vec4<f32>(y);
         }";
-    assert_eq!(branches_on_uniforms(source), ["lit", "main"]);
+    assert_eq!(branches_on_uniforms(source), ["lit", "spin", "main"]);
 }
