@@ -67,27 +67,28 @@ fn source_of(module: &Module, function: &Function, expression: Handle<Expression
 /// alone.
 fn uniform_branches(module: &Module, function: &Function, block: &Block, found: &mut Vec<String>) {
     for statement in block.iter() {
+        // The statement's own test: an if's condition, a switch's selector, a loop's exit test
+        // (lavapipe inlines the uniforms of all three).
+        let test = match statement {
+            Statement::If { condition, .. } => Some(*condition),
+            Statement::Switch { selector, .. } => Some(*selector),
+            Statement::Loop { break_if, .. } => *break_if,
+            _ => None,
+        };
+        if test.is_some_and(|test| source_of(module, function, test) == Source::Uniform) {
+            found.push(function.name.clone().unwrap_or_default());
+        }
         match statement {
-            Statement::If { condition, accept, reject } => {
-                if source_of(module, function, *condition) == Source::Uniform {
-                    found.push(function.name.clone().unwrap_or_default());
-                }
+            Statement::If { accept, reject, .. } => {
                 uniform_branches(module, function, accept, found);
                 uniform_branches(module, function, reject, found);
             }
-            Statement::Switch { selector, cases } => {
-                if source_of(module, function, *selector) == Source::Uniform {
-                    found.push(function.name.clone().unwrap_or_default());
-                }
+            Statement::Switch { cases, .. } => {
                 for case in cases {
                     uniform_branches(module, function, &case.body, found);
                 }
             }
-            Statement::Loop { body, continuing, break_if } => {
-                // A loop's exit test counts as a branch too (lavapipe inlines those as well).
-                if break_if.is_some_and(|test| source_of(module, function, test) == Source::Uniform) {
-                    found.push(function.name.clone().unwrap_or_default());
-                }
+            Statement::Loop { body, continuing, .. } => {
                 uniform_branches(module, function, body, found);
                 uniform_branches(module, function, continuing, found);
             }
