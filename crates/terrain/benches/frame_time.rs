@@ -1,8 +1,9 @@
 //! Frame-time benchmark: the median time to draw one 1280x720 frame off-screen (drawing and
 //! waiting for the GPU, without reading the image back, as a window would), for the course's
 //! island, the default procedural island and procedural islands of 4097 and 8193 samples a side,
-//! in both looks; then, for the course island in the modern look, what each of its features costs
-//! (the frame with one feature switched off, measured in the same rounds); and, for the maps the
+//! in both looks; then, for the course island, what each draw adds to a frame of either look (the
+//! frame drawn up to each draw in turn, measured in the same rounds) and, in the modern look, what
+//! each of its features costs (the frame with one feature switched off); and, for the maps the
 //! course look draws as its static mesh, what culling the hidden mirrored land saves.
 //!
 //! Run with `cargo bench -p terrain`. It forces the Vulkan backend (on a machine without a GPU,
@@ -19,7 +20,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use terrain::headless::HeadlessRenderer;
-use terrain::render::{Backend, FrameView, Gpu, MESH_MAX_SIDE};
+use terrain::render::{Backend, FrameView, Gpu, MESH_MAX_SIDE, draw_names};
 use terrain::settings::ReflectionQuality;
 use terrain::world::World;
 use terrain::world::assets::load_course_folder;
@@ -62,7 +63,7 @@ fn main() {
         ]);
     }
     println!(
-        "{:<28} {:>10} {:>8} {:>8} {:>9} {:>20}",
+        "{:<44} {:>10} {:>8} {:>8} {:>9} {:>20}",
         "scene / look", "median ms", "min ms", "max ms", "setup s", "terrain triangles"
     );
     let mut results = BTreeMap::new();
@@ -73,10 +74,11 @@ fn main() {
         };
         println!("{name}: world ready in {:.1} s", started.elapsed().as_secs_f64());
         let looks = [("course", Settings::course()), ("modern", Settings::default())];
-        for (look, median) in measure(&gpu, &world, &config, name, &looks) {
+        for (look, median, _) in measure(&gpu, &world, &config, name, &looks) {
             results.insert(format!("{name}/{look}"), median);
         }
         if matches!(scene, Scene::Course) {
+            draw_by_draw(&gpu, &world, &config);
             breakdown(&gpu, &world, &config);
         }
         // Only the static mesh (maps up to MESH_MAX_SIDE) culls its reflection.
@@ -88,39 +90,53 @@ fn main() {
 }
 
 /// Measures `variants` of `world` in interleaved rounds; prints a line each and returns their
-/// medians in milliseconds.
+/// names, medians and fastest frames in milliseconds.
 fn measure(
     gpu: &Gpu,
     world: &World,
     config: &SceneConfig,
     scene: &str,
     variants: &[(&str, Settings)],
-) -> Vec<(String, f64)> {
+) -> Vec<(String, f64, f64)> {
     let variants: Vec<Variant> =
-        variants.iter().map(|(name, settings)| (*name, settings.clone(), true)).collect();
+        variants.iter().map(|(name, settings)| Variant::new(name, settings)).collect();
     measure_variants(gpu, world, config, scene, &variants)
 }
 
-/// A variant to measure: its name, its settings, and whether the course look culls the mirrored
-/// chunks the land hides.
-type Variant<'a> = (&'a str, Settings, bool);
+/// A variant to measure.
+struct Variant {
+    name: String,
+    settings: Settings,
+    /// Whether the course look culls the mirrored chunks the land hides.
+    cull: bool,
+    /// How many of the look's draws a frame makes (`None`: all).
+    draws: Option<usize>,
+}
+
+impl Variant {
+    /// The full frame of `settings`.
+    fn new(name: &str, settings: &Settings) -> Self {
+        Variant { name: name.to_string(), settings: settings.clone(), cull: true, draws: None }
+    }
+}
 
 /// Measures `variants` of `world` in interleaved rounds; prints a line each and returns their
-/// medians in milliseconds.
+/// names, medians and fastest frames in milliseconds.
 fn measure_variants(
     gpu: &Gpu,
     world: &World,
     config: &SceneConfig,
     scene: &str,
     variants: &[Variant],
-) -> Vec<(String, f64)> {
+) -> Vec<(String, f64, f64)> {
     let view = FrameView {
         pose: config.camera_start,
         field_of_view_degrees: config.field_of_view_degrees,
         time_seconds: 0.0,
     };
     let setup = Instant::now();
-    let mut headless = match HeadlessRenderer::new(gpu, world, config, &variants[0].1, SIZE.0, SIZE.1) {
+    let mut headless = match HeadlessRenderer::new(gpu, world, config, &variants[0].settings, SIZE.0, SIZE.1)
+    {
         Ok(headless) => headless,
         Err(error) => {
             println!("{scene:<28} cannot render: {error}");
@@ -131,10 +147,11 @@ fn measure_variants(
     let mut times: Vec<Vec<Duration>> = vec![Vec::new(); variants.len()];
     let mut triangles = vec![[0; 2]; variants.len()];
     for round in 0..ROUNDS {
-        for (i, (_, settings, cull)) in variants.iter().enumerate() {
+        for (i, variant) in variants.iter().enumerate() {
             let switch = Instant::now();
-            let ready = headless.renderer_mut().apply(gpu, world, settings).and_then(|()| {
-                headless.renderer_mut().set_cull_hidden_reflection(*cull);
+            let ready = headless.renderer_mut().apply(gpu, world, &variant.settings).and_then(|()| {
+                headless.renderer_mut().set_cull_hidden_reflection(variant.cull);
+                headless.renderer_mut().set_draw_limit(variant.draws);
                 // The first frames of a look upload its resources and draw its light map.
                 let warm_up = if round == 0 { WARM_UP_FRAMES } else { 1 };
                 (0..warm_up).try_for_each(|_| headless.draw(gpu, &view))
@@ -162,20 +179,47 @@ fn measure_variants(
         .iter()
         .zip(times.iter_mut())
         .zip(setups.iter().zip(&triangles))
-        .map(|(((name, _, _), times), (setup, [direct, mirrored]))| {
+        .map(|((variant, times), (setup, [direct, mirrored]))| {
+            let name = &variant.name;
             times.sort();
             let median = ms(times[times.len() / 2]);
             println!(
-                "{:<28} {median:>10.1} {:>8.1} {:>8.1} {:>9.2} {:>20}",
+                "{:<44} {median:>10.1} {:>8.1} {:>8.1} {:>9.2} {:>20}",
                 format!("{scene} / {name}"),
                 ms(times[0]),
                 ms(times[times.len() - 1]),
                 setup.as_secs_f64(),
                 format!("{direct} + {mirrored}"),
             );
-            (name.to_string(), median)
+            (name.to_string(), median, ms(times[0]))
         })
         .collect()
+}
+
+/// Where a frame's time goes on `world`, draw by draw, in both looks: the frame drawn up to each
+/// of its draws in turn, in the same interleaved rounds; the difference is what the draw adds
+/// (drawn over what came before it: the land hides much of what follows it).
+fn draw_by_draw(gpu: &Gpu, world: &World, config: &SceneConfig) {
+    for (look, settings) in [("course", Settings::course()), ("modern", Settings::default())] {
+        let names = draw_names(settings.look);
+        let variants: Vec<Variant> = (0..=names.len())
+            .map(|limit| Variant {
+                name: if limit == 0 { "nothing drawn".into() } else { format!("+ {}", names[limit - 1]) },
+                draws: Some(limit),
+                ..Variant::new("", &settings)
+            })
+            .collect();
+        println!("where the {look} look's time goes (course island; the frame drawn up to each draw):");
+        let medians = measure_variants(gpu, world, config, "  course-island-256", &variants);
+        for ((_, median_before, fastest_before), (name, median, fastest)) in medians.iter().zip(&medians[1..])
+        {
+            println!(
+                "  {name:<26} {:>+8.1} ms (fastest frames {:+.1} ms)",
+                median - median_before,
+                fastest - fastest_before
+            );
+        }
+    }
 }
 
 /// Where the modern look's time goes on `world`: the frame with each feature switched off, in
@@ -201,8 +245,8 @@ fn breakdown(gpu: &Gpu, world: &World, config: &SceneConfig) {
     with("course look", |s| s.look = Look::Course);
     println!("where the modern look's time goes (course island; each line switches one thing off):");
     let medians = measure(gpu, world, config, "  course-island-256", &variants);
-    if let Some((_, reference)) = medians.first() {
-        for (name, median) in &medians[1..] {
+    if let Some((_, reference, _)) = medians.first() {
+        for (name, median, _) in &medians[1..] {
             println!(
                 "  {name:<26} {:>+8.1} ms ({:.2} of the full frame)",
                 median - reference,
@@ -216,11 +260,11 @@ fn breakdown(gpu: &Gpu, world: &World, config: &SceneConfig) {
 /// interleaved rounds as drawing them all.
 fn culling(gpu: &Gpu, world: &World, config: &SceneConfig, scene: &str) {
     let variants = [
-        ("course, culled reflection", Settings::course(), true),
-        ("course, whole reflection", Settings::course(), false),
+        Variant::new("course, culled reflection", &Settings::course()),
+        Variant { cull: false, ..Variant::new("course, whole reflection", &Settings::course()) },
     ];
     let medians = measure_variants(gpu, world, config, &format!("  {scene}"), &variants);
-    if let [(_, culled), (_, whole)] = medians[..] {
+    if let [(_, culled, _), (_, whole, _)] = medians[..] {
         println!(
             "  culling the hidden reflection: {:+.1} ms ({culled:.1} / {whole:.1} = {:.2})",
             culled - whole,

@@ -7,8 +7,8 @@ mod common;
 use common::{gpu, marker_world, project, render, view_from};
 use image::{Rgba, RgbaImage};
 use terrain::headless::{HeadlessRenderer, OffscreenTarget};
-use terrain::render::{Backend, Renderer};
-use terrain::{SceneConfig, Settings};
+use terrain::render::{Backend, Renderer, draw_names};
+use terrain::{Look, SceneConfig, Settings};
 
 const SIZE: (u32, u32) = (160, 96);
 
@@ -203,4 +203,47 @@ fn culling_the_hidden_reflection_changes_no_pixel() {
     }
     // And it did leave some out (else this test would prove nothing).
     assert!(left_out > 1000, "the culling left out only {left_out} triangles");
+}
+
+/// The draw limit adds a look's draws one at a time, in the order `draw_names` lists them: none
+/// leaves the cleared frame, each draw that reaches the screen changes it, all of them give the
+/// full frame.
+#[test]
+fn the_draw_limit_adds_the_draws_in_order() {
+    let Some(gpu) = gpu(Backend::Vulkan) else {
+        return;
+    };
+    let world = common::default_island();
+    // From the sea, low, toward the island: its reflection in front of it.
+    let view = common::view_from([0.0, 1.0, 16.0], 0.0, -4.0);
+    for settings in [Settings::course(), Settings::default()] {
+        let look = settings.look;
+        let mut renderer =
+            HeadlessRenderer::new(gpu, world, &SceneConfig::default(), &settings, 160, 96).expect("renderer");
+        let full = renderer.render(gpu, &view).expect("renders");
+        let names = draw_names(look);
+        // The modern look's first draws go into the reflection, which only the water shows.
+        let off_screen = if look == Look::Modern { 2 } else { 0 };
+        let mut previous: Option<RgbaImage> = None;
+        for limit in 0..=names.len() {
+            renderer.renderer_mut().set_draw_limit(Some(limit));
+            let image = renderer.render(gpu, &view).expect("renders");
+            if limit <= off_screen {
+                assert!(image.pixels().all(|p| p.0 == [0, 0, 0, 255]), "{look:?}: {limit} draws left a mark");
+            } else {
+                assert!(
+                    previous.as_ref() != Some(&image),
+                    "{look:?}: drawing the {} changed nothing",
+                    names[limit - 1]
+                );
+            }
+            previous = Some(image);
+        }
+        assert!(previous.as_ref() == Some(&full), "{look:?}: every draw is not the full frame");
+        renderer.renderer_mut().set_draw_limit(None);
+        assert!(
+            renderer.render(gpu, &view).expect("renders") == full,
+            "{look:?}: no limit is not the full frame"
+        );
+    }
 }

@@ -8,13 +8,16 @@ use super::land::LandPass;
 use super::pipeline::{PassContext, PipelinePair, PipelineSpec, pipelines, shader_source};
 use super::sky::{SkyFaces, SkyPass};
 use super::water::WaterPass;
-use super::{RenderError, Renderer};
+use super::{DrawBudget, RenderError, Renderer};
 use crate::config::SceneConfig;
 use crate::world::World;
 
 /// The course look's land on maps too large for its mesh (the grid): the WGSL source its
 /// pipeline is built from.
 pub(super) const GRID_SHADER: &str = shader_source!("heights.wgsl", "grid.wgsl", "grid_course.wgsl");
+
+/// The course look's draws, in the order a frame makes them.
+pub(super) const DRAWS: [&str; 5] = ["land", "mirrored land", "sky", "mirrored sky", "water"];
 
 /// Largest heightmap side drawn as the static mesh in the course's look. Its memory grows with
 /// the map (about 40 bytes a sample); larger maps use the grid, whose picture differs from the
@@ -138,10 +141,14 @@ impl Renderer {
         let (Some(course), Some(depth)) = (&self.course, &self.depth) else { return };
         let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view());
         let [direct, mirrored, _] = &self.frame_groups;
+        let mut budget = DrawBudget(self.draw_limit);
         match &course.land {
             CourseLand::Mesh(land) => {
-                land.draw(&mut pass, direct, false);
-                land.draw(&mut pass, mirrored, true);
+                for (frame, mirrored_pass) in [(direct, false), (mirrored, true)] {
+                    if budget.take() {
+                        land.draw(&mut pass, frame, mirrored_pass);
+                    }
+                }
             }
             CourseLand::Grid { pipelines, wireframe, group, .. } => {
                 if let Some(grid) = &self.grid {
@@ -149,16 +156,23 @@ impl Renderer {
                     for (mirrored_pass, frame, which) in
                         [(false, direct, GridPass::Direct), (true, mirrored, GridPass::Mirrored)]
                     {
-                        pass.set_pipeline(pipelines.get(mirrored_pass));
-                        pass.set_bind_group(0, frame, &[]);
-                        pass.set_bind_group(1, group, &[]);
-                        grid.draw(&mut pass, which);
+                        if budget.take() {
+                            pass.set_pipeline(pipelines.get(mirrored_pass));
+                            pass.set_bind_group(0, frame, &[]);
+                            pass.set_bind_group(1, group, &[]);
+                            grid.draw(&mut pass, which);
+                        }
                     }
                 }
             }
         }
-        course.sky.draw(&mut pass, direct, false);
-        course.sky.draw(&mut pass, mirrored, true);
-        course.water.draw(&mut pass, direct);
+        for (frame, mirrored_pass) in [(direct, false), (mirrored, true)] {
+            if budget.take() {
+                course.sky.draw(&mut pass, frame, mirrored_pass);
+            }
+        }
+        if budget.take() {
+            course.water.draw(&mut pass, direct);
+        }
     }
 }

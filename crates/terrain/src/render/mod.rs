@@ -102,6 +102,34 @@ pub struct Renderer {
     modern: Option<ModernLook>,
     depth: Option<DepthBuffer>,
     stats: FrameStats,
+    /// How many of the look's draws a frame makes ([`Renderer::set_draw_limit`]).
+    draw_limit: Option<usize>,
+}
+
+/// The draws a frame of `look` makes, in order (see [`Renderer::set_draw_limit`]).
+pub fn draw_names(look: Look) -> &'static [&'static str] {
+    match look {
+        Look::Course => &course::DRAWS,
+        Look::Modern => &modern::DRAWS,
+    }
+}
+
+/// Counts a frame's draws against [`Renderer::set_draw_limit`].
+#[derive(Debug, Clone, Copy)]
+struct DrawBudget(Option<usize>);
+
+impl DrawBudget {
+    /// Whether the next draw is made (and counts it).
+    fn take(&mut self) -> bool {
+        match &mut self.0 {
+            None => true,
+            Some(0) => false,
+            Some(left) => {
+                *left -= 1;
+                true
+            }
+        }
+    }
 }
 
 /// GPU memory a renderer holds, in bytes, by what it is for.
@@ -177,6 +205,7 @@ impl Renderer {
             modern: None,
             depth: None,
             stats: FrameStats::default(),
+            draw_limit: None,
         };
         renderer.apply(gpu, world, settings)?;
         Ok(renderer)
@@ -245,6 +274,14 @@ impl Renderer {
         if let Some(land) = self.course.as_mut().and_then(CourseLook::mesh) {
             land.set_cull_hidden_reflection(on);
         }
+    }
+
+    /// Makes frames draw only the first `limit` of their look's draws ([`draw_names`] lists
+    /// them in order), or all of them (`None`, the default): adding one draw after another
+    /// measures what each adds to a frame. What the sun's move redraws (the modern look's shadow
+    /// and light maps) is always drawn.
+    pub fn set_draw_limit(&mut self, limit: Option<usize>) {
+        self.draw_limit = limit;
     }
 
     /// The settings the renderer draws with.

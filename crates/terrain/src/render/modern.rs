@@ -13,7 +13,11 @@ use super::reflection::{REFLECTION_FORMAT, ReflectionTarget};
 use super::sea::SeaPass;
 use super::shadow::ShadowPass;
 use super::sky::{SkyFaces, SkyPass};
-use super::{RenderError, Renderer};
+use super::{DrawBudget, RenderError, Renderer};
+
+/// The modern look's draws, in the order a frame makes them (the first two into the reflection;
+/// they count even when the water reflects nothing).
+pub(super) const DRAWS: [&str; 5] = ["reflected land", "reflected sky", "land", "sky", "water"];
 use crate::config::SceneConfig;
 use crate::settings::Settings;
 use crate::world::World;
@@ -218,22 +222,35 @@ impl Renderer {
             (Some(wireframe), true) => wireframe,
             _ => &modern.land,
         };
+        let mut budget = DrawBudget(self.draw_limit);
+        // Counted whether or not the water reflects, so that the draws keep their places.
+        let (reflected_land, reflected_sky) = (budget.take(), budget.take());
         if let Some(reflection) = &modern.reflection {
             let mut pass = reflection.begin(encoder);
-            pass.set_pipeline(&land[1]);
-            pass.set_bind_group(0, mirrored, &[]);
-            pass.set_bind_group(1, &modern.land_group, &[]);
-            pass.set_bind_group(2, &modern.lighting.group, &[]);
-            grid.draw(&mut pass, GridPass::Mirrored);
-            modern.sky.draw(&mut pass, mirrored, true);
+            if reflected_land {
+                pass.set_pipeline(&land[1]);
+                pass.set_bind_group(0, mirrored, &[]);
+                pass.set_bind_group(1, &modern.land_group, &[]);
+                pass.set_bind_group(2, &modern.lighting.group, &[]);
+                grid.draw(&mut pass, GridPass::Mirrored);
+            }
+            if reflected_sky {
+                modern.sky.draw(&mut pass, mirrored, true);
+            }
         }
         let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view());
-        pass.set_pipeline(&land[0]);
-        pass.set_bind_group(0, direct, &[]);
-        pass.set_bind_group(1, &modern.land_group, &[]);
-        pass.set_bind_group(2, &modern.lighting.group, &[]);
-        grid.draw(&mut pass, GridPass::Direct);
-        modern.sky.draw(&mut pass, direct, false);
-        modern.sea.draw(&mut pass, direct);
+        if budget.take() {
+            pass.set_pipeline(&land[0]);
+            pass.set_bind_group(0, direct, &[]);
+            pass.set_bind_group(1, &modern.land_group, &[]);
+            pass.set_bind_group(2, &modern.lighting.group, &[]);
+            grid.draw(&mut pass, GridPass::Direct);
+        }
+        if budget.take() {
+            modern.sky.draw(&mut pass, direct, false);
+        }
+        if budget.take() {
+            modern.sea.draw(&mut pass, direct);
+        }
     }
 }
