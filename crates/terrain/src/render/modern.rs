@@ -14,13 +14,13 @@ use super::sea::SeaPass;
 use super::shadow::ShadowPass;
 use super::sky::{SkyFaces, SkyPass};
 use super::{DrawBudget, RenderError, Renderer};
+use crate::config::SceneConfig;
+use crate::settings::Settings;
+use crate::world::World;
 
 /// The modern look's draws, in the order a frame makes them (the first two into the reflection;
 /// they count even when the water reflects nothing).
 pub(super) const DRAWS: [&str; 5] = ["reflected land", "reflected sky", "land", "sky", "water"];
-use crate::config::SceneConfig;
-use crate::settings::Settings;
-use crate::world::World;
 
 /// The modern look's land (the grid, lit): the WGSL source its pipeline is built from.
 pub(super) const LAND_SHADER: &str =
