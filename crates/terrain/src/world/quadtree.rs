@@ -12,6 +12,8 @@
 //!
 //! The tree holds 12 bytes per node: about 0.016 bytes per height sample.
 
+use std::collections::HashMap;
+
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -247,49 +249,79 @@ impl TerrainTree {
     /// Decides which edges of each chosen patch need a skirt (those along a drawn neighbour of
     /// another stride: where they meet, the two surfaces differ) and how deep: the crack is at
     /// most the patch's error plus its neighbour's, so the skirt hangs that deep (the deepest
-    /// neighbour along the whole edge), plus half a cell.
+    /// neighbour along the whole edge), plus half a cell. The neighbours are found in the tree
+    /// (the node across the edge, or the drawn node above it, or the drawn nodes below it along
+    /// the edge), so the work grows with the patches chosen, not with the map.
     fn set_skirts(&self, chosen: &mut [Chosen]) {
-        // The stride (0: nothing drawn) and error of the chosen patches on a raster of level-0
-        // nodes.
-        let (width, depth) = (self.levels[0].nodes_x as usize, self.levels[0].nodes_z as usize);
-        let mut raster = vec![(0u32, 0.0f32); width * depth];
-        for c in chosen.iter() {
-            let (i0, j0, n) = c.raster_square();
-            for j in j0..(j0 + n).min(depth) {
-                for i in i0..(i0 + n).min(width) {
-                    raster[j * width + i] = (c.patch.stride, c.error);
-                }
-            }
-        }
-        let at = |i: isize, j: isize| {
-            if (0..width as isize).contains(&i) && (0..depth as isize).contains(&j) {
-                raster[j as usize * width + i as usize]
-            } else {
-                (0, 0.0)
-            }
-        };
+        let drawn: HashMap<(usize, u32, u32), f32> = chosen.iter().map(|c| (c.node(), c.error)).collect();
         for c in chosen.iter_mut() {
-            let (i0, j0, n) = c.raster_square();
-            let (i0, j0, n) = (i0 as isize, j0 as isize, n as isize);
-            let stride = c.patch.stride;
+            let (level, i, j) = c.node();
             let mut deepest = 0.0f32;
-            // The cells just outside each edge, in the mask's order.
-            let outside: [&dyn Fn(isize) -> (isize, isize); 4] =
-                [&|k| (i0 + k, j0 - 1), &|k| (i0 + k, j0 + n), &|k| (i0 - 1, j0 + k), &|k| (i0 + n, j0 + k)];
-            for (edge, cell) in outside.iter().enumerate() {
-                for k in 0..n {
-                    let (i, j) = cell(k);
-                    let (other, error) = at(i, j);
-                    if other != 0 && other != stride {
-                        c.skirts |= 1 << edge;
-                        deepest = deepest.max(error);
-                    }
+            for (edge, across) in EDGE_NEIGHBOURS.iter().enumerate() {
+                let (Some(ni), Some(nj)) = (i.checked_add_signed(across.0), j.checked_add_signed(across.1))
+                else {
+                    continue;
+                };
+                if let Some(error) = self.other_stride_along(&drawn, (level, ni, nj), edge) {
+                    c.skirts |= 1 << edge;
+                    deepest = deepest.max(error);
                 }
             }
-            c.patch.skirt_depth = c.error + deepest + 0.5 * self.cell * stride as f32;
+            c.patch.skirt_depth = c.error + deepest + 0.5 * self.cell * c.patch.stride as f32;
         }
     }
+
+    /// The largest error of the drawn nodes of another level than `node` along its side that
+    /// faces a patch across `edge` (the patch's edge, [`EDGE_NEIGHBOURS`] order), `node` being
+    /// that patch's neighbour at its own level; `None` when that side is drawn at the patch's
+    /// level or not at all.
+    fn other_stride_along(
+        &self,
+        drawn: &HashMap<(usize, u32, u32), f32>,
+        node: (usize, u32, u32),
+        edge: usize,
+    ) -> Option<f32> {
+        let (level, i, j) = node;
+        let nodes = &self.levels[level];
+        if i >= nodes.nodes_x || j >= nodes.nodes_z || drawn.contains_key(&node) {
+            return None;
+        }
+        // A coarser node drawn over the neighbour covers the whole edge.
+        if let Some(error) = (level + 1..self.levels.len())
+            .find_map(|up| drawn.get(&(up, i >> (up - level), j >> (up - level))))
+        {
+            return Some(*error);
+        }
+        self.finer_along(drawn, node, edge)
+    }
+
+    /// The largest error of the drawn nodes below `node` on its side facing `edge`'s patch.
+    fn finer_along(
+        &self,
+        drawn: &HashMap<(usize, u32, u32), f32>,
+        (level, i, j): (usize, u32, u32),
+        edge: usize,
+    ) -> Option<f32> {
+        if level == 0 {
+            return None;
+        }
+        let finer = &self.levels[level - 1];
+        // The two children on the side facing the patch: the neighbour lies before the patch's
+        // first row or column (edges 0 and 2) or after its last one (edges 1 and 3).
+        let facing = if edge % 2 == 0 { 1 } else { 0 };
+        let children = if edge < 2 { [(0, facing), (1, facing)] } else { [(facing, 0), (facing, 1)] };
+        children
+            .into_iter()
+            .map(|(di, dj)| (level - 1, 2 * i + di, 2 * j + dj))
+            .filter(|&(_, ci, cj)| ci < finer.nodes_x && cj < finer.nodes_z)
+            .filter_map(|child| drawn.get(&child).copied().or_else(|| self.finer_along(drawn, child, edge)))
+            .reduce(f32::max)
+    }
 }
+
+/// Across each edge of a patch ([`SKIRT_MASKS`] bit order: first row, last row, first column,
+/// last column), the step to its neighbour at the same level.
+const EDGE_NEIGHBOURS: [(i32, i32); 4] = [(0, -1), (0, 1), (-1, 0), (1, 0)];
 
 /// Number of skirt masks: one bit for each of a patch's four edges.
 pub const SKIRT_MASKS: usize = 16;
@@ -305,11 +337,10 @@ struct Chosen {
 }
 
 impl Chosen {
-    /// The square of level-0 nodes the patch covers: first column, first row, side.
-    fn raster_square(&self) -> (usize, usize, usize) {
-        let side = 1usize << self.level;
-        let span = PATCH_CELLS as usize;
-        (self.patch.column as usize / span, self.patch.row as usize / span, side)
+    /// The node: its level and position in the level.
+    fn node(&self) -> (usize, u32, u32) {
+        let span = PATCH_CELLS << self.level;
+        (self.level, self.patch.column / span, self.patch.row / span)
     }
 }
 
@@ -622,6 +653,68 @@ mod tests {
         let groups =
             flat.select(&view(CameraPose::new(Vec3::new(0.0, 90.0, 0.0), 0.0, -89.0), 2.0), &mut patches);
         assert_eq!(groups[0] as usize, patches.len(), "{groups:?}");
+    }
+
+    #[test]
+    fn skirts_are_those_a_raster_of_the_drawn_patches_finds() {
+        let config = SceneConfig::default();
+        let m = map(257, 257, |r, c| {
+            let (x, z) = (r as f32, c as f32);
+            150.0 + 40.0 * (x / 19.0).sin() * (z / 23.0).cos() + ((r * 31 + c * 17) % 23) as f32
+        });
+        let tree = TerrainTree::new(&m, &config);
+        let (width, depth) = (tree.levels[0].nodes_x as usize, tree.levels[0].nodes_z as usize);
+        let mut with_skirts = 0;
+        for pose in [
+            CameraPose::new(Vec3::new(-9.0, 1.0, 9.0), 45.0, -10.0),
+            CameraPose::new(Vec3::new(0.0, 3.0, 12.0), 0.0, -15.0),
+            CameraPose::new(Vec3::new(2.0, 25.0, 2.0), 30.0, -80.0),
+        ] {
+            let mut patches = Vec::new();
+            let groups = tree.select(&view(pose, 2.0), &mut patches);
+            let masks =
+                groups.iter().enumerate().flat_map(|(mask, &n)| std::iter::repeat_n(mask, n as usize));
+            // The stride (0: nothing) and error of the patch drawn over each level-0 node.
+            let square = |p: &Patch| {
+                let level = p.stride.trailing_zeros() as usize;
+                let span = PATCH_CELLS * p.stride;
+                let error = tree.error(level, p.column / span, p.row / span);
+                ((p.column / PATCH_CELLS) as isize, (p.row / PATCH_CELLS) as isize, p.stride as isize, error)
+            };
+            let mut raster = vec![(0u32, 0.0f32); width * depth];
+            for p in &patches {
+                let (i0, j0, n, error) = square(p);
+                for j in j0..(j0 + n).min(depth as isize) {
+                    for i in i0..(i0 + n).min(width as isize) {
+                        raster[j as usize * width + i as usize] = (p.stride, error);
+                    }
+                }
+            }
+            let at = |i: isize, j: isize| {
+                let inside = (0..width as isize).contains(&i) && (0..depth as isize).contains(&j);
+                if inside { raster[j as usize * width + i as usize] } else { (0, 0.0) }
+            };
+            for (p, mask) in patches.iter().zip(masks) {
+                let (i0, j0, n, error) = square(p);
+                let outside: [&dyn Fn(isize) -> (isize, isize); 4] =
+                    [&|k| (i0 + k, j0 - 1), &|k| (i0 + k, j0 + n), &|k| (i0 - 1, j0 + k), &|k| {
+                        (i0 + n, j0 + k)
+                    }];
+                let (mut expected, mut deepest) = (0, 0.0f32);
+                for (edge, cell) in outside.iter().enumerate() {
+                    for (other, other_error) in (0..n).map(|k| at(cell(k).0, cell(k).1)) {
+                        if other != 0 && other != p.stride {
+                            expected |= 1 << edge;
+                            deepest = deepest.max(other_error);
+                        }
+                    }
+                }
+                assert_eq!(mask, expected, "{p:?}");
+                assert_eq!(p.skirt_depth, error + deepest + 0.5 * tree.cell * p.stride as f32, "{p:?}");
+                with_skirts += usize::from(mask != 0);
+            }
+        }
+        assert!(with_skirts > 10, "only {with_skirts} patches with skirts");
     }
 
     #[test]
