@@ -317,7 +317,7 @@ impl TerrainTree {
         let finer = &self.levels[level - 1];
         // The two children on the side facing the patch: the neighbour lies before the patch's
         // first row or column (edges 0 and 2) or after its last one (edges 1 and 3).
-        let facing = if edge % 2 == 0 { 1 } else { 0 };
+        let facing = u32::from(edge.is_multiple_of(2));
         let children = if edge < 2 { [(0, facing), (1, facing)] } else { [(facing, 0), (facing, 1)] };
         children
             .into_iter()
