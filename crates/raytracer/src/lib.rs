@@ -11,22 +11,20 @@
 //! progress through a callback.
 
 pub mod accel;
+pub mod base;
 pub mod camera;
-pub mod error;
 pub mod geometry;
-pub mod image_io;
 pub mod integrator;
 pub mod light;
 pub mod material;
-pub mod memory;
 pub mod parts;
 pub mod prepare;
 pub mod procedural;
 pub mod render;
-pub mod sampler;
-pub mod sampling;
 pub mod scene;
 pub mod texture;
+
+pub use base::{error, image_io, memory, sampler, sampling};
 
 pub use image_io::Image;
 pub use memory::MemoryBudget;

@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use crate::texture::TextureRef;
+use crate::scene::texture::TextureRef;
 
 /// The material of a primitive. All weights are plain factors of the classic model; none is
 /// normalised against the others (a course file may well have `diff + refl > 1`).

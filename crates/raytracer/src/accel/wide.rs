@@ -25,7 +25,8 @@ use glam::DVec3;
 use smallvec::{SmallVec, smallvec};
 use wide::f32x8 as Lanes;
 
-use crate::geometry::{Bounds, Ray};
+use crate::base::bounds::Bounds;
+use crate::base::ray::Ray;
 
 /// Most items in a leaf.
 pub const MAX_LEAF: usize = 16;

@@ -20,7 +20,7 @@ use std::f64::consts::TAU;
 use glam::{DVec2, DVec3};
 
 use super::{Bounds, Ray, ShapeHit, ShapePart, course_perpendicular};
-use crate::error::GeometryError;
+use crate::base::error::GeometryError;
 
 /// Pieces tested together behind their common hull.
 const GROUP: usize = 4;

@@ -5,7 +5,7 @@ use std::f64::consts::TAU;
 use glam::DVec3;
 
 use super::{Bounds, Ray, ShapeHit, ShapePart, course_perpendicular, solve_quadratic};
-use crate::error::GeometryError;
+use crate::base::error::GeometryError;
 
 /// A closed cylinder from the bottom cap centre `base` (`O1=`) to the top cap centre `top`
 /// (`O2=`) with radius `radius` (`R=`).

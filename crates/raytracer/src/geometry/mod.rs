@@ -10,23 +10,21 @@
 //! nearest hit only.
 
 pub mod bezier;
-mod bounds;
 mod cylinder;
 pub mod mesh;
 pub mod obj;
 mod plane;
-mod ray;
 mod sphere;
 mod square;
 pub mod triangle;
 
+pub use crate::base::bounds::Bounds;
+pub use crate::base::ray::{Ray, SPAWN_OFFSET, offset_origin};
 pub use bezier::Bezier;
-pub use bounds::Bounds;
 pub use cylinder::Cylinder;
 pub use mesh::{MESH_ERROR_SCALE, MeshVertices, TriangleIndices, TriangleMesh};
 pub use obj::{MeshFile, MeshTransform};
 pub use plane::Plane;
-pub use ray::{Ray, SPAWN_OFFSET, offset_origin};
 pub use sphere::Sphere;
 pub use square::Square;
 pub use triangle::Triangle;
@@ -89,9 +87,6 @@ pub enum Shape {
     Bezier(Box<Bezier>),
     /// A triangle mesh, loaded (the triangles of one material of a mesh file).
     Mesh(Arc<TriangleMesh>),
-    /// A mesh file as the scene names it (`primitive mesh`, `primitive polyhedron`), before
-    /// [`crate::PreparedScene`] loads it: it has no surface until then.
-    MeshFile(Box<MeshFile>),
 }
 
 impl Shape {
@@ -108,7 +103,6 @@ impl Shape {
             // Meshes start their rays at the origin (every caller's `t_min` is 0; a mesh hit is
             // only trusted beyond its rounding error anyway).
             Shape::Mesh(m) => m.intersect(ray, t_max),
-            Shape::MeshFile(_) => None,
         }
     }
 
@@ -156,7 +150,6 @@ impl Shape {
                 ShapePart::Triangle { index, .. } => m.face_normal(index),
                 _ => DVec3::Z,
             },
-            Shape::MeshFile(_) => DVec3::Z,
         }
     }
 
@@ -199,7 +192,6 @@ impl Shape {
                 ShapePart::Triangle { index, .. } => m.texture_tangents(index),
                 _ => any_tangents(DVec3::Z),
             },
-            Shape::MeshFile(_) => any_tangents(DVec3::Z),
         }
     }
 
@@ -223,15 +215,14 @@ impl Shape {
                 ShapePart::Triangle { index, b1, b2 } => m.texture_coordinates(index, b1, b2),
                 _ => (0.0, 0.0),
             },
-            Shape::MeshFile(_) => (0.0, 0.0),
         }
     }
 
-    /// Whether the shape has a box around it ([`Shape::bounds`] is `Some`): all but a plane,
-    /// an empty mesh and a mesh file not loaded.
+    /// Whether the shape has a box around it ([`Shape::bounds`] is `Some`): all but a plane and
+    /// an empty mesh.
     pub fn is_bounded(&self) -> bool {
         match self {
-            Shape::Plane(_) | Shape::MeshFile(_) => false,
+            Shape::Plane(_) => false,
             Shape::Mesh(m) => !m.is_empty(),
             _ => true,
         }
@@ -247,7 +238,6 @@ impl Shape {
             Shape::Triangle(s) => Some(s.bounds()),
             Shape::Bezier(s) => Some(s.bounds()),
             Shape::Mesh(m) => (!m.is_empty()).then(|| m.bounds()),
-            Shape::MeshFile(_) => None,
         }
     }
 
@@ -263,7 +253,6 @@ impl Shape {
             Shape::Bezier(s) => s.magnitude(),
             // Single-precision vertices: rounding errors are larger (see `MESH_ERROR_SCALE`).
             Shape::Mesh(m) => m.magnitude() * MESH_ERROR_SCALE,
-            Shape::MeshFile(_) => 0.0,
         }
     }
 }

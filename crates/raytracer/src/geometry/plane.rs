@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{Ray, ShapeHit, ShapePart};
-use crate::error::{GeometryError, unit_direction, usable_length_squared};
+use crate::base::error::{GeometryError, unit_direction, usable_length_squared};
 
 /// The plane `{P : P . normal = offset}` with optional world-anchored texture axes.
 #[derive(Clone, Debug, PartialEq)]

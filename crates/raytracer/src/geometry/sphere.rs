@@ -5,7 +5,7 @@ use std::f64::consts::{PI, TAU};
 use glam::DVec3;
 
 use super::{Bounds, Ray, ShapeHit, ShapePart, order};
-use crate::error::{GeometryError, unit_direction};
+use crate::base::error::{GeometryError, unit_direction};
 
 /// A sphere with a texture frame.
 ///

@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{Bounds, Ray, ShapeHit, ShapePart};
-use crate::error::{GeometryError, usable_length_squared};
+use crate::base::error::{GeometryError, usable_length_squared};
 
 /// The parallelogram `centre + a * dx + b * dy` for `a, b` in `[-1, 1]`.
 #[derive(Clone, Debug, PartialEq)]

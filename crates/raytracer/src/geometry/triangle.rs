@@ -10,7 +10,7 @@
 use glam::DVec3;
 
 use super::{Bounds, Ray, ShapeHit, ShapePart};
-use crate::error::GeometryError;
+use crate::base::error::GeometryError;
 
 /// A ray in the frame of the watertight test: `kz` is the axis where the direction is largest,
 /// `kx`, `ky` the other two (swapped to keep the winding), and the shear that maps the direction

@@ -28,9 +28,9 @@ use std::f64::consts::{FRAC_1_PI, PI};
 
 use glam::DVec3;
 
+use crate::base::sampling::{cosine_hemisphere_pdf, orthonormal_basis};
 use crate::material::Material;
 use crate::prepare::Interaction;
-use crate::sampling::{cosine_hemisphere_pdf, orthonormal_basis};
 
 /// GGX roughness of the `spec` lobe: `sqrt(2 / (SPEC_POWER + 2))`.
 pub const SPEC_ALPHA: f64 = 0.301_511_344_577_763_6;
@@ -449,9 +449,9 @@ pub fn power_heuristic(a: f64, b: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::sampling::chi_square::{check, integral};
     use crate::geometry::test_util::TestRng;
     use crate::integrator::classic::SPEC_POWER;
-    use crate::sampling::chi_square::{check, integral};
 
     /// An interaction at the origin whose normal facing the viewer is `n`, on the plane's front
     /// or back.
@@ -551,7 +551,7 @@ mod tests {
         ] {
             let bsdf = Bsdf::new(&m, DVec3::new(0.9, 0.5, 1.0), &at(n, true));
             for _ in 0..20 {
-                let wo = crate::sampling::cosine_hemisphere(n, rng.uniform(), rng.uniform());
+                let wo = crate::base::sampling::cosine_hemisphere(n, rng.uniform(), rng.uniform());
                 let count = 20_000;
                 let mut albedo = DVec3::ZERO;
                 for _ in 0..count {

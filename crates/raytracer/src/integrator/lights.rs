@@ -23,11 +23,11 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
+use crate::base::sampler::PixelRng;
+use crate::base::sampling::{Discrete, cosine_hemisphere, uniform_cone, uniform_cone_pdf, uniform_sphere};
 use crate::geometry::{Bounds, Ray, Shape, offset_origin};
 use crate::light::Light;
 use crate::prepare::PreparedScene;
-use crate::sampler::PixelRng;
-use crate::sampling::{Discrete, cosine_hemisphere, uniform_cone, uniform_cone_pdf, uniform_sphere};
 use crate::scene::Scene;
 
 /// The light a point receives along one sampled direction.
@@ -313,7 +313,7 @@ impl<'s> Lights<'s> {
     fn emit_from_environment(&self, rng: &mut PixelRng, p_choice: f64) -> EmittedPhoton {
         let (centre, radius) = self.bounds;
         let from = uniform_sphere(rng.uniform(), rng.uniform());
-        let (t, b) = crate::sampling::orthonormal_basis(from);
+        let (t, b) = crate::base::sampling::orthonormal_basis(from);
         let r = radius * rng.uniform().sqrt();
         let phi = std::f64::consts::TAU * rng.uniform();
         let origin = centre + from * radius + (t * phi.cos() + b * phi.sin()) * r;
@@ -339,8 +339,8 @@ fn environment_mean(scene: &Scene) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::sampling::chi_square::{check, integral};
     use crate::geometry::test_util::TestRng;
-    use crate::sampling::chi_square::{check, integral};
     use crate::scene::{SourceFile, parse};
 
     fn scene(text: &str) -> PreparedScene {

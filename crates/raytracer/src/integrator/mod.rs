@@ -10,6 +10,7 @@
 
 pub mod bsdf;
 pub mod classic;
+pub mod course_lobes;
 pub mod lights;
 pub mod path;
 pub mod photon;

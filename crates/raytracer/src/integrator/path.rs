@@ -11,11 +11,11 @@
 
 use glam::DVec3;
 
+use crate::base::sampler::PixelRng;
 use crate::geometry::Ray;
 use crate::integrator::bsdf::{Bsdf, Transport, class, power_heuristic};
 use crate::integrator::lights::Lights;
 use crate::prepare::{Hit, Interaction, PreparedScene};
-use crate::sampler::PixelRng;
 
 /// The path depth (segments) from which Russian roulette may end a path.
 pub const RR_DEPTH: u32 = 5;

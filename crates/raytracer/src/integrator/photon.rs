@@ -24,21 +24,21 @@
 
 use std::time::{Duration, Instant};
 
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use rayon::prelude::*;
 
+use crate::base::memory::format_bytes;
+use crate::base::sampler::{PixelRng, hash_values};
+use crate::base::sampling::{cosine_hemisphere, uniform_sphere, uniform_sphere_point};
 use crate::geometry::Ray;
-use crate::integrator::classic::{GlossyLobe, MAX_DEPTH, refract};
-use crate::integrator::photon_map::{BYTES_PER_PHOTON, Photon, PhotonMap, with_buffer};
+use crate::integrator::course_lobes::{GlossyLobe, MAX_DEPTH, refract};
+pub use crate::integrator::photon_map::{MIN_PHOTONS, PhotonEstimate};
+use crate::integrator::photon_map::{BYTES_PER_PHOTON, Photon, PhotonMap};
 use crate::light::Light;
 use crate::material::Material;
 use crate::prepare::PreparedScene;
-use crate::sampler::{PixelRng, hash_values};
-use crate::sampling::{cosine_hemisphere, uniform_sphere, uniform_sphere_point};
 use crate::scene::{Diagnostic, PhotonSettings, Severity};
 
-/// An estimate with this many photons or fewer is taken as no light (the course's rule).
-pub const MIN_PHOTONS: usize = 8;
 /// Photons traced between two progress reports (and checks of whether the map is full).
 const BATCH: u64 = 1 << 16;
 /// Photons a worker traces in one go.
@@ -247,18 +247,6 @@ pub fn check_memory(settings: &PhotonSettings, limit: u64) -> Result<(), Diagnos
     })
 }
 
-/// A byte count in the largest binary unit that keeps it at least 1 (`4.0 GiB`).
-pub fn format_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
-    let mut value = bytes as f64;
-    let mut unit = 0;
-    while value >= 1024.0 && unit + 1 < UNITS.len() {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 { format!("{bytes} bytes") } else { format!("{value:.1} {}", UNITS[unit]) }
-}
-
 /// Traces the photons of spec section 10 and builds the map. `progress(done, total)` is called
 /// from the calling thread after each batch of photons.
 pub fn build_photon_map(
@@ -378,48 +366,6 @@ impl Tracer<'_> {
             ray = at.spawn(dir);
         }
         rays
-    }
-}
-
-/// The irradiance estimate of spec section 10 over a photon map.
-#[derive(Clone, Copy, Debug)]
-pub struct PhotonEstimate<'m> {
-    map: &'m PhotonMap,
-    /// Photons gathered (`sample_photons=`).
-    k: usize,
-    /// Squared largest gathering radius (`sample_dist=` squared).
-    max_dist2: f32,
-    /// `4 / emit_photons`.
-    scale: f64,
-}
-
-impl<'m> PhotonEstimate<'m> {
-    /// The estimate over `map` with the scene's settings (`emit_photons` the photons asked for).
-    pub fn new(map: &'m PhotonMap, settings: &PhotonSettings) -> PhotonEstimate<'m> {
-        PhotonEstimate {
-            map,
-            k: settings.sample_photons as usize,
-            max_dist2: (settings.sample_dist * settings.sample_dist) as f32,
-            scale: 4.0 / settings.emit_photons.max(1) as f64,
-        }
-    }
-
-    /// The irradiance at `point`, whose unit normal `normal` faces the viewer: the powers of those
-    /// of the `k` nearest photons within the radius that arrived on the normal's side, times
-    /// `4 / (emit_photons r^2)`; zero when [`MIN_PHOTONS`] or fewer are found.
-    pub fn irradiance(&self, point: DVec3, normal: DVec3) -> DVec3 {
-        with_buffer(|found| {
-            let nearest = self.map.k_nearest(point, self.k, self.max_dist2, found);
-            if nearest.found <= MIN_PHOTONS || nearest.radius2 <= 0.0 {
-                return DVec3::ZERO;
-            }
-            let n = normal.as_vec3();
-            let sum = found.iter().fold(Vec3::ZERO, |sum, f| {
-                let photon = self.map.photon(f.index);
-                if n.dot(photon.direction) < 0.0 { sum + photon.power } else { sum }
-            });
-            sum.as_dvec3() * (self.scale / nearest.radius2 as f64)
-        })
     }
 }
 

@@ -19,6 +19,8 @@ use std::cell::RefCell;
 
 use glam::{DVec3, Vec3};
 
+use crate::scene::PhotonSettings;
+
 /// Most photons in a leaf.
 pub const LEAF_SIZE: usize = 8;
 /// Ranges at least this long are split on two threads while building.
@@ -292,6 +294,52 @@ pub fn with_buffer<R>(f: impl FnOnce(&mut Vec<Found>) -> R) -> R {
 }
 
 /// The photons within `sqrt(radius2)` of `point`, nearest first, by testing every one.
+
+/// An estimate with this many photons or fewer is taken as no light (the course's rule).
+pub const MIN_PHOTONS: usize = 8;
+
+/// The irradiance estimate of spec section 10 over a photon map.
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonEstimate<'m> {
+    map: &'m PhotonMap,
+    /// Photons gathered (`sample_photons=`).
+    k: usize,
+    /// Squared largest gathering radius (`sample_dist=` squared).
+    max_dist2: f32,
+    /// `4 / emit_photons`.
+    scale: f64,
+}
+
+impl<'m> PhotonEstimate<'m> {
+    /// The estimate over `map` with the scene's settings (`emit_photons` the photons asked for).
+    pub fn new(map: &'m PhotonMap, settings: &PhotonSettings) -> PhotonEstimate<'m> {
+        PhotonEstimate {
+            map,
+            k: settings.sample_photons as usize,
+            max_dist2: (settings.sample_dist * settings.sample_dist) as f32,
+            scale: 4.0 / settings.emit_photons.max(1) as f64,
+        }
+    }
+
+    /// The irradiance at `point`, whose unit normal `normal` faces the viewer: the powers of those
+    /// of the `k` nearest photons within the radius that arrived on the normal's side, times
+    /// `4 / (emit_photons r^2)`; zero when [`MIN_PHOTONS`] or fewer are found.
+    pub fn irradiance(&self, point: DVec3, normal: DVec3) -> DVec3 {
+        with_buffer(|found| {
+            let nearest = self.map.k_nearest(point, self.k, self.max_dist2, found);
+            if nearest.found <= MIN_PHOTONS || nearest.radius2 <= 0.0 {
+                return DVec3::ZERO;
+            }
+            let n = normal.as_vec3();
+            let sum = found.iter().fold(Vec3::ZERO, |sum, f| {
+                let photon = self.map.photon(f.index);
+                if n.dot(photon.direction) < 0.0 { sum + photon.power } else { sum }
+            });
+            sum.as_dvec3() * (self.scale / nearest.radius2 as f64)
+        })
+    }
+}
+
 #[cfg(test)]
 fn brute_force(photons: &[Photon], point: Vec3, radius2: f32) -> Vec<(f32, Vec3)> {
     let mut v: Vec<(f32, Vec3)> = photons

@@ -40,6 +40,7 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::base::sampler::{PixelRng, stream};
 use crate::camera::Camera;
 use crate::integrator::bsdf::{Bsdf, Transport, class};
 use crate::integrator::lights::Lights;
@@ -47,7 +48,6 @@ use crate::integrator::path::{Vertex, walk};
 use crate::integrator::photon_map::{MapEntry, PhotonMap};
 use crate::prepare::PreparedScene;
 use crate::render::Rows;
-use crate::sampler::{PixelRng, stream};
 use crate::scene::{Diagnostic, PhotonSettings, Severity};
 
 /// Photons traced into one photon map.
@@ -159,8 +159,8 @@ pub fn check_memory(
             severity: Severity::Error,
             message: format!(
                 "an SPPM render of {pixels} pixels would need {} of memory, over the limit of {}",
-                crate::integrator::photon::format_bytes(bytes),
-                crate::integrator::photon::format_bytes(limit)
+                crate::base::memory::format_bytes(bytes),
+                crate::base::memory::format_bytes(limit)
             ),
             location: None,
             notes: vec![format!("{BYTES_PER_PIXEL} bytes a pixel; render a smaller image (`--size`)")],

@@ -15,11 +15,11 @@ use super::{
     CONTRAST_THRESHOLD, MAX_NESTED_FACTOR, NOISE_GRID, NOISE_THRESHOLD, Progress, REFINE_GRID,
     RenderSettings, RenderStats, Rows, Sampling, Stage, camera_for,
 };
+use crate::base::sampler::{PixelRng, Siblings, Strata};
 use crate::camera::Camera;
 use crate::integrator::Classic;
 use crate::integrator::classic::TraceContext;
 use crate::prepare::PreparedScene;
-use crate::sampler::{PixelRng, Siblings, Strata};
 
 /// Pass numbers, part of each pixel's random seed.
 const FIRST_PASS: u32 = 0;

@@ -26,8 +26,8 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 
 use super::Rows;
+use crate::base::sampler::ExactSum;
 use crate::integrator::sppm::{SppmState, SppmStats};
-use crate::sampler::ExactSum;
 
 /// The most chunks a run's rows are cut into when a render keeps a checkpoint.
 pub const CHUNKS: u32 = 32;

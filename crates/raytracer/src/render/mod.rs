@@ -32,22 +32,22 @@ use std::ops::Range;
 
 mod adaptive;
 pub mod checkpoint;
-mod rows;
 mod run;
 
+pub use crate::base::memory::DEFAULT_MEMORY_LIMIT;
+pub use crate::base::rows::Rows;
 use checkpoint::{Checkpoint, CheckpointError, Estimate};
-pub use rows::Rows;
 pub use run::{path_sums, run_seed};
 use run::{render_rows_run, render_sppm_run};
 
+use crate::base::image_io::Image;
+use crate::base::sampler::ExactSum;
 use crate::camera::Camera;
-use crate::image_io::Image;
 use crate::integrator::Model;
 use crate::integrator::path::DEFAULT_MAX_DEPTH;
 use crate::integrator::photon::{self, PhotonStats};
 use crate::integrator::sppm::{self, SppmSettings, SppmStats};
 use crate::prepare::{Hit, PreparedScene};
-use crate::sampler::ExactSum;
 use crate::scene::{Algorithm, Diagnostic, PhotonSettings, check_image_size};
 
 /// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
@@ -71,8 +71,6 @@ pub const MAX_RUNS: u32 = 1 << 16;
 pub const DEFAULT_PATH_SPP: u32 = 64;
 /// Deepest path `--max-depth` accepts.
 pub const MAX_DEPTH_LIMIT: u32 = 1000;
-/// The memory a render may use for its photon map unless told otherwise, in bytes (4 GiB).
-pub const DEFAULT_MEMORY_LIMIT: u64 = 4 << 30;
 
 /// How pixels are sampled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

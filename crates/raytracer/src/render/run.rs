@@ -11,12 +11,12 @@ use rayon::prelude::*;
 use super::adaptive::AdaptiveSampler;
 use super::checkpoint::{self, Checkpoint, Estimate};
 use super::{Progress, RenderError, RenderSettings, RenderStats, Rows, Stage, camera_for};
+use crate::base::sampler::{ExactSum, PixelRng, hash_values, stream};
 use crate::integrator::path::PathTracer;
 use crate::integrator::photon::{self, PhotonEstimate};
 use crate::integrator::sppm::{self, SppmSettings, SppmState};
 use crate::integrator::{Classic, Model};
 use crate::prepare::PreparedScene;
-use crate::sampler::{ExactSum, PixelRng, hash_values, stream};
 
 /// The seed of run `run`: the render's seed for the first run (so that a render of one run is the
 /// render as it always was), one derived from it and the run for the others.

@@ -3,23 +3,22 @@
 //! Conventions: the world is **z-up** and right-handed; colours are linear RGB (material colours in
 //! [0, 1], light colours may exceed 1).
 
-mod diagnostic;
-mod parser;
-mod source;
+pub mod course;
+pub mod texture;
 
-pub use diagnostic::{Diagnostic, Location, Severity};
-pub use parser::{
+pub use crate::base::diagnostic::{Diagnostic, Location, Severity};
+pub use crate::base::source::{MAX_SCENE_FILE_BYTES, ReadError, SourceFile, Span};
+pub use course::{
     MAX_EMITTED_PHOTONS, MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_KEPT_DIAGNOSTICS, MAX_QUALITY,
     MAX_SAMPLE_PHOTONS, MAX_STORED_PHOTONS, Omitted, Parsed, SceneError, aspect_mismatch, check_image_size,
     parse,
 };
-pub use source::{MAX_SCENE_FILE_BYTES, ReadError, SourceFile, Span};
 
 use std::sync::Arc;
 
 use glam::DVec3;
 
-use crate::geometry::Shape;
+use crate::geometry::{MeshFile, Shape};
 use crate::light::Light;
 use crate::material::Material;
 
@@ -32,8 +31,12 @@ pub struct Scene {
     pub camera: CameraSettings,
     /// The lights, in file order.
     pub lights: Vec<Light>,
-    /// The objects, in file order.
+    /// The objects, in file order (but for the mesh files, which are in [`Scene::meshes`] until
+    /// the scene is prepared).
     pub primitives: Vec<Primitive>,
+    /// The mesh files the scene names (`primitive mesh`, `primitive polyhedron`), in file order,
+    /// not yet read: [`crate::PreparedScene`] reads each and puts its primitives in its place.
+    pub meshes: Vec<MeshPrimitive>,
 }
 
 /// The `background` block.
@@ -229,5 +232,18 @@ pub struct Primitive {
     pub shape: Shape,
     /// The surface, shared by every primitive with the same material (the parser shares equal
     /// untextured materials; a mesh's triangles all share their mesh's).
+    pub material: Arc<Material>,
+}
+
+/// A mesh file the scene names (`primitive mesh`, `primitive polyhedron`), before it is read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshPrimitive {
+    /// Its place among [`Scene::primitives`]: its triangles go just before the primitive with this
+    /// index (after those of earlier mesh files with the same index), one primitive per material
+    /// of the file.
+    pub index: usize,
+    /// The file, as the scene names it, and where its vertices go.
+    pub file: MeshFile,
+    /// The block's material (a material of the file replaces its colour).
     pub material: Arc<Material>,
 }

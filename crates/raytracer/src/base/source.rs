@@ -233,7 +233,7 @@ fn read_in_parallel(_file: &std::fs::File, _len: u64) -> Option<Vec<u8>> {
 
 /// The lines of `text` numbered from `first`, without line ends (`\n` or `\r\n`); a final line
 /// end starts an empty last line.
-pub(super) fn numbered_lines(first: u32, text: &str) -> impl Iterator<Item = (u32, &str)> {
+pub(crate) fn numbered_lines(first: u32, text: &str) -> impl Iterator<Item = (u32, &str)> {
     // The line ends found by `memchr` (vector instructions); `str::split` is slower on lines of
     // a few bytes.
     let mut start = 0;
@@ -246,12 +246,12 @@ pub(super) fn numbered_lines(first: u32, text: &str) -> impl Iterator<Item = (u3
 }
 
 /// The number of `\n` in `text`.
-pub(super) fn count_line_ends(text: &str) -> usize {
+pub(crate) fn count_line_ends(text: &str) -> usize {
     memchr::memchr_iter(b'\n', text.as_bytes()).count()
 }
 
 /// A line without the `\r` of a `\r\n` line end.
-pub(super) fn without_return(line: &str) -> &str {
+pub(crate) fn without_return(line: &str) -> &str {
     line.strip_suffix('\r').unwrap_or(line)
 }
 

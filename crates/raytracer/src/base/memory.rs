@@ -4,8 +4,20 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::integrator::photon::format_bytes;
-use crate::render::DEFAULT_MEMORY_LIMIT;
+/// The memory a render may use for its photon map unless told otherwise, in bytes (4 GiB).
+pub const DEFAULT_MEMORY_LIMIT: u64 = 4 << 30;
+
+/// A byte count in the largest binary unit that keeps it at least 1 (`4.0 GiB`).
+pub fn format_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 5] = ["bytes", "KiB", "MiB", "GiB", "TiB"];
+    let mut value = bytes as f64;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 { format!("{bytes} bytes") } else { format!("{value:.1} {}", UNITS[unit]) }
+}
 
 /// A budget of bytes shared by everything a scene loads. Charges are atomic, so loaders running
 /// in parallel may share it; for messages that do not depend on timing, charge in file order.

@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::Ray;
+use super::ray::Ray;
 
 /// An axis-aligned box `[min, max]`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,11 +1,15 @@
 //! Tests of the scene parser: every key of every block, and every diagnostic with its position.
 
+use std::sync::Arc;
+
 use glam::{DVec2, DVec3};
 
 use super::*;
 use crate::geometry::Shape;
 use crate::light::Light;
-use crate::texture::{Builtin, TextureSource};
+use crate::material::Material;
+use crate::scene::texture::{Builtin, TextureSource};
+use crate::scene::{Algorithm, PhotonSettings, Severity};
 
 fn source(text: &str) -> SourceFile {
     SourceFile::from_text("test.txt", None, text.to_owned())
@@ -671,7 +675,7 @@ mod properties {
 
     use super::*;
 
-    const VALID: &str = include_str!("../../../../scenes/showcase.txt");
+    const VALID: &str = include_str!("../../../../../scenes/showcase.txt");
 
     fn check(text: &str) {
         let src = source(text);
@@ -762,11 +766,8 @@ fn mesh_and_polyhedron_keys_and_defaults() {
     let text = "primitive mesh\n file= models/bunny.obj\n O= 1 2 3\n scale= 2\n rotation= 0 0 1.5\nend\n\
                 primitive polyhedron\n mesh= teapot.obj\n size= 1 2 3\n angles= 90 0 0\nend\n\
                 primitive polyhedron\n mesh= a b.obj\nend\n";
-    let prims = ok(text).scene.primitives;
-    let file = |i: usize| match &prims[i].shape {
-        Shape::MeshFile(f) => (f.path.clone(), f.transform),
-        other => panic!("{other:?}"),
-    };
+    let meshes = ok(text).scene.meshes;
+    let file = |i: usize| (meshes[i].file.path.clone(), meshes[i].file.transform);
     assert_eq!(
         file(0),
         (
