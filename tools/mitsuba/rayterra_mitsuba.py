@@ -4,7 +4,7 @@
 This is a check of rayterra, not a part of it: the same scene, converted key by key to Mitsuba 3's
 plugins (variant `scalar_rgb`), rendered by Mitsuba's own `path` integrator (`volpath` when a glass
 absorbs), so that rayterra's `--model path` and `--model sppm` can be compared with a renderer the
-field trusts. The reading of every key is the one in rayterra's README ("How it renders"):
+field trusts. The reading of every key is the one in rayterra's docs/raytracer-models.md ("How it renders"):
 
 - camera: `perspective` (or `thinlens` for `aperture=`), field of view from `lens_W`, box pixel
   filter; the thin lens focuses at `focal_dist=`, or on the surface seen at the image centre;

@@ -13,7 +13,7 @@
 //!   build the mesh, the bytes a triangle, and the render time and the ratio of the two renders.
 //!
 //! Times are wall-clock, median of `RAYTERRA_BENCH_RUNS` runs (default 3; loads and renders
-//! alike), all threads; the ratios are what the README quotes. Nothing is asserted: speed is
+//! alike), all threads; the ratios are what docs/raytracer-speed.md quotes. Nothing is asserted: speed is
 //! measured, not tested.
 
 use std::fmt::Write as _;

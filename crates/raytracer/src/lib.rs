@@ -2,10 +2,17 @@
 //!
 //! World convention: **z-up**, right-handed. Colours are linear RGB.
 //!
-//! Data flows one way: scene text -> [`scene::parse`] (with positions for diagnostics) ->
-//! [`scene::Scene`] (plain data) -> [`PreparedScene`] (textures loaded, BVH built) ->
-//! [`render::render`] (pixels in parallel, per-pixel random numbers) -> [`Image`] (linear) ->
+//! Data flows one way: scene text -> [`scene::parse`] (the course language's front end,
+//! [`scene::course`], with positions for diagnostics) -> [`scene::Scene`] (plain data) ->
+//! [`PreparedScene`] (meshes read, textures loaded, BVH built) -> a model of [`integrator`] over
+//! rows of pixels, driven by [`render::render`] (per-pixel random numbers) -> [`Image`] (linear) ->
 //! [`image_io::write_image`] (PNG, BMP, EXR, HDR).
+//!
+//! The modules stand in tiers, bottom up: [`base`]; [`geometry`] and [`accel`]; the scene
+//! description ([`scene`], [`material`], [`light`]); the scene formats ([`scene::course`]);
+//! preparation ([`prepare`], [`texture`], [`procedural`], [`camera`]); the models
+//! ([`integrator`]); the driver and split renders ([`render`], [`parts`]). No module imports from
+//! a tier above its own (`tests/layers.rs` checks it; `docs/architecture.md` has the code map).
 //!
 //! The library never prints and never exits: it returns values and typed errors, and reports
 //! progress through a callback.

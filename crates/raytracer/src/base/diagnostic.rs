@@ -2,7 +2,17 @@
 
 use std::fmt;
 
-use super::source::Span;
+/// A position in a scene file: 1-based line and column (counted in characters; a tab is one
+/// column) and the length of the marked text in characters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Span {
+    /// 1-based line number.
+    pub line: u32,
+    /// 1-based column of the first marked character.
+    pub column: u32,
+    /// Number of marked characters (at least 1 when displayed).
+    pub len: u32,
+}
 
 /// How serious a diagnostic is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]

@@ -16,7 +16,7 @@ pub const BLOCKS_PER_TILE: u32 = 6;
 /// if less) to [`MAX_TILE_BLOCK_ROWS`].
 ///
 /// Chosen by measurement (`cargo bench -p raytracer --bench tiles`, rays traced by each tile of
-/// four scenes; the README has the table): smaller blocks share the work more evenly, but with
+/// four scenes; docs/cluster.md has the table): smaller blocks share the work more evenly, but with
 /// adaptive anti-aliasing each block traces the rows above and below it again (its first pass
 /// compares every pixel with its neighbours), and the first pass is most of a render's rays.
 /// About six blocks a tile is where the largest tile's work is least for 4 and 8 tiles; with more

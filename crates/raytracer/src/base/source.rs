@@ -3,19 +3,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+pub use super::diagnostic::Span;
 use super::diagnostic::{Diagnostic, Location, Severity};
-
-/// A position in a scene file: 1-based line and column (counted in characters; a tab is one
-/// column) and the length of the marked text in characters.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
-pub struct Span {
-    /// 1-based line number.
-    pub line: u32,
-    /// 1-based column of the first marked character.
-    pub column: u32,
-    /// Number of marked characters (at least 1 when displayed).
-    pub len: u32,
-}
 
 /// The decoded text of a scene file, with the name used in messages and the folder that texture
 /// paths are resolved against first.

@@ -15,7 +15,7 @@ use std::sync::Arc;
 use glam::{DMat3, DVec3};
 
 use super::mesh::{MeshVertices, TriangleIndices, smooth_normals};
-use crate::scene::Location;
+use crate::base::diagnostic::Location;
 
 /// Largest OBJ file read, in bytes (2 GiB: about 40 million triangles).
 pub const MAX_OBJ_BYTES: u64 = 2 << 30;

@@ -48,4 +48,3 @@ pub fn refract(v: DVec3, n: DVec3, eta: f64) -> DVec3 {
     let cos_t2 = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
     if cos_t2 > 0.0 { v * eta + n * (eta * cos_i - cos_t2.sqrt()) } else { v + 2.0 * cos_i * n }
 }
-

@@ -8,6 +8,7 @@
 //! The physically based models share the material lobes of [`bsdf`] and the light sampling of
 //! [`lights`].
 
+pub mod adaptive;
 pub mod bsdf;
 pub mod classic;
 pub mod course_lobes;
@@ -15,6 +16,7 @@ pub mod lights;
 pub mod path;
 pub mod photon;
 pub mod photon_map;
+pub mod report;
 pub mod sppm;
 
 pub use classic::Classic;

@@ -9,9 +9,15 @@
 //! The same walk is the camera pass of SPPM ([`crate::integrator::sppm`]), which stops it at a
 //! diffuse vertex (see [`walk`] and [`Vertex`]).
 
-use glam::DVec3;
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::base::sampler::PixelRng;
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::base::rows::Rows;
+use crate::base::sampler::{ExactSum, PixelRng, stream};
+use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrator::bsdf::{Bsdf, Transport, class, power_heuristic};
 use crate::integrator::lights::Lights;
@@ -156,6 +162,50 @@ impl<'s> PathTracer<'s> {
     pub fn radiance(&self, ray: Ray, rng: &mut PixelRng) -> PathResult {
         walk(self.scene, &self.lights, self.max_depth, ray, rng, |_, _, _, _, _, _| Vertex::CONTINUE)
     }
+}
+
+/// The exact sums of the path tracer's samples `samples` (sample indices) of every pixel of
+/// `rows` (in the order of [`Rows::ys`]) seen through `camera`, and the rays traced: the path
+/// model's row loop. Sample `s` of pixel `(x, y)` draws from its own stream (`seed`, pixel, `s`),
+/// so sums of disjoint sample ranges and rows merge ([`ExactSum::merge`]) into exactly the sums of
+/// one render. `progress(done)` reports samples finished (pixels times samples) from worker
+/// threads.
+pub fn render_sums(
+    scene: &PreparedScene,
+    camera: &Camera,
+    seed: u64,
+    max_depth: u32,
+    rows: &Rows,
+    samples: Range<u64>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Vec<ExactSum>, u64) {
+    let tracer = PathTracer::new(scene, max_depth);
+    let width = rows.width() as usize;
+    let ys: Vec<u32> = rows.ys().collect();
+    let mut sums = vec![ExactSum::default(); rows.len()];
+    let rays = AtomicU64::new(0);
+    let done = AtomicU64::new(0);
+    let per_row = width as u64 * (samples.end.saturating_sub(samples.start));
+    if width > 0 {
+        sums.par_chunks_mut(width).enumerate().for_each(|(row, sums)| {
+            let y = ys[row];
+            let mut row_rays = 0;
+            for (x, sum) in sums.iter_mut().enumerate() {
+                let x = x as u32;
+                for s in samples.clone() {
+                    let mut rng = PixelRng::for_sample(seed, stream::PATH, x, y, s);
+                    let (dx, dy) = (rng.uniform(), rng.uniform());
+                    let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
+                    let result = tracer.radiance(camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
+                    sum.add(result.radiance);
+                    row_rays += result.rays;
+                }
+            }
+            rays.fetch_add(row_rays, Ordering::Relaxed);
+            progress(done.fetch_add(per_row, Ordering::Relaxed) + per_row);
+        });
+    }
+    (sums, rays.load(Ordering::Relaxed))
 }
 
 #[cfg(test)]

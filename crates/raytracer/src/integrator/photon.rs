@@ -22,18 +22,23 @@
 //! probabilities, which gives each choice the same probability as the course's renderer's three
 //! draws.
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::base::memory::format_bytes;
+pub use crate::base::memory::format_bytes;
+use crate::base::rows::Rows;
 use crate::base::sampler::{PixelRng, hash_values};
 use crate::base::sampling::{cosine_hemisphere, uniform_sphere, uniform_sphere_point};
 use crate::geometry::Ray;
+use crate::integrator::adaptive::{AdaptiveSampler, PixelSampling};
+use crate::integrator::classic::Classic;
 use crate::integrator::course_lobes::{GlossyLobe, MAX_DEPTH, refract};
-pub use crate::integrator::photon_map::{MIN_PHOTONS, PhotonEstimate};
 use crate::integrator::photon_map::{BYTES_PER_PHOTON, Photon, PhotonMap};
+pub use crate::integrator::photon_map::{MIN_PHOTONS, PhotonEstimate};
+pub use crate::integrator::report::PhotonStats;
+use crate::integrator::report::{Progress, RenderStats, Stage};
 use crate::light::Light;
 use crate::material::Material;
 use crate::prepare::PreparedScene;
@@ -179,40 +184,6 @@ pub fn emit(light: &Light, rng: &mut PixelRng) -> Ray {
             let (origin, normal) =
                 uniform_sphere_point(shape.centre, shape.radius, rng.uniform(), rng.uniform());
             Ray::new(origin, cosine_hemisphere(normal, rng.uniform(), rng.uniform()))
-        }
-    }
-}
-
-/// What building a photon map took.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct PhotonStats {
-    /// Photons the scene asks for (`emit_photons=`, or `--photons`): the estimate's divisor.
-    pub requested: u64,
-    /// Photons traced (fewer than requested when the map filled up first).
-    pub emitted: u64,
-    /// Photons stored in the map.
-    pub stored: u64,
-    /// Rays traced for the photons.
-    pub rays: u64,
-    /// Time spent tracing photons.
-    pub trace_time: Duration,
-    /// Time spent building the k-d tree.
-    pub build_time: Duration,
-    /// Bytes the map holds.
-    pub map_bytes: u64,
-}
-
-impl PhotonStats {
-    /// The statistics of two photon maps together.
-    pub fn add(&self, other: &PhotonStats) -> PhotonStats {
-        PhotonStats {
-            requested: self.requested + other.requested,
-            emitted: self.emitted + other.emitted,
-            stored: self.stored + other.stored,
-            rays: self.rays + other.rays,
-            trace_time: self.trace_time + other.trace_time,
-            build_time: self.build_time + other.build_time,
-            map_bytes: self.map_bytes.max(other.map_bytes),
         }
     }
 }
@@ -369,8 +340,36 @@ impl Tracer<'_> {
     }
 }
 
+/// The photon model's row loop: the colours of the pixels of `rows` (row by row, in the order of
+/// [`Rows::ys`]) and what they took, gathering from `map`, which is built first (reporting
+/// [`Stage::TracingPhotons`] and [`Stage::BuildingPhotonMap`]) when it is `None`: its making is
+/// counted in the stats of the call that builds it.
+pub fn render_rows(
+    scene: &PreparedScene,
+    map: &mut Option<(PhotonMap, PhotonStats)>,
+    settings: &PhotonSettings,
+    pixels: &PixelSampling,
+    rows: &Rows,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> (Vec<DVec3>, RenderStats) {
+    let mut built = None;
+    let (map, _) = map.get_or_insert_with(|| {
+        let report = |done, total| progress(Progress { stage: Stage::TracingPhotons, done, total });
+        let (map, stats) = build_photon_map(scene, settings, pixels.seed, &report);
+        progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
+        built = Some(stats);
+        (map, stats)
+    });
+    let integrator = Classic::with_photons(scene, PhotonEstimate::new(map, settings));
+    let (colors, mut stats) = AdaptiveSampler::new(integrator, pixels).run(rows, progress);
+    stats.photons = built;
+    (colors, stats)
+}
+
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
     use crate::geometry::{Sphere, Square};
 

@@ -293,8 +293,6 @@ pub fn with_buffer<R>(f: impl FnOnce(&mut Vec<Found>) -> R) -> R {
     FOUND.with(|b| f(&mut b.borrow_mut()))
 }
 
-/// The photons within `sqrt(radius2)` of `point`, nearest first, by testing every one.
-
 /// An estimate with this many photons or fewer is taken as no light (the course's rule).
 pub const MIN_PHOTONS: usize = 8;
 
@@ -341,6 +339,7 @@ impl<'m> PhotonEstimate<'m> {
 }
 
 #[cfg(test)]
+/// The photons within `sqrt(radius2)` of `point`, nearest first, by testing every one.
 fn brute_force(photons: &[Photon], point: Vec3, radius2: f32) -> Vec<(f32, Vec3)> {
     let mut v: Vec<(f32, Vec3)> = photons
         .iter()

@@ -40,14 +40,15 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::base::rows::Rows;
 use crate::base::sampler::{PixelRng, stream};
 use crate::camera::Camera;
 use crate::integrator::bsdf::{Bsdf, Transport, class};
 use crate::integrator::lights::Lights;
 use crate::integrator::path::{Vertex, walk};
 use crate::integrator::photon_map::{MapEntry, PhotonMap};
+pub use crate::integrator::report::SppmStats;
 use crate::prepare::PreparedScene;
-use crate::render::Rows;
 use crate::scene::{Diagnostic, PhotonSettings, Severity};
 
 /// Photons traced into one photon map.
@@ -167,37 +168,6 @@ pub fn check_memory(
         });
     }
     Ok(())
-}
-
-/// What an SPPM render did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SppmStats {
-    /// Passes made.
-    pub passes: u64,
-    /// Photons emitted in all.
-    pub photons: u64,
-    /// Photons stored in all.
-    pub stored: u64,
-    /// Rays traced (camera paths, shadow rays, photons).
-    pub rays: u64,
-    /// Seconds spent tracing photons and building their maps.
-    pub photon_seconds: f64,
-    /// The mean final radius over the pixels with a visible point, in world units.
-    pub mean_radius: f64,
-}
-
-impl SppmStats {
-    /// The statistics of two runs together (the mean radius is their mean).
-    pub fn add(&self, other: &SppmStats) -> SppmStats {
-        SppmStats {
-            passes: self.passes + other.passes,
-            photons: self.photons + other.photons,
-            stored: self.stored + other.stored,
-            rays: self.rays + other.rays,
-            photon_seconds: self.photon_seconds + other.photon_seconds,
-            mean_radius: (self.mean_radius + other.mean_radius) / 2.0,
-        }
-    }
 }
 
 /// The state of one pixel across passes.

@@ -1,23 +1,7 @@
-//! The render driver: pixels in parallel, adaptive anti-aliasing, progress and statistics.
-//!
-//! Adaptive mode (the default) improves on the template's edge resampling: every pixel first takes
-//! one sample at its centre, recording a tag of what it saw (objects along the mirror and
-//! refraction chain, lit point lights) and an estimate of its own noise (from the spread of its
-//! area-light shadow rays and glossy directions). Then:
-//! - every pixel whose tag differs from a neighbour's (a geometry or shadow edge) or whose colour
-//!   differs from a neighbour's by more than [`CONTRAST_THRESHOLD`] (a texture or lighting edge)
-//!   is re-rendered with a jittered `REFINE_GRID x REFINE_GRID` grid of samples, which replaces
-//!   its first sample;
-//! - every other pixel whose estimated error exceeds [`NOISE_THRESHOLD`] (a penumbra or a busy
-//!   glossy reflection) keeps its first sample and adds a small `NOISE_GRID x NOISE_GRID` grid
-//!   whose shadow and glossy samples bring the total to as many as its error estimate asks for
-//!   (up to [`MAX_NESTED_FACTOR`] times the first pass's), the two averaged by their sample counts.
-//!
-//! (The template used a fixed 3 x 3 grid, on tag edges only.) Uniform mode takes the same number
-//! of stratified samples in every pixel.
-//!
-//! Rows are rendered in parallel, but each pixel's random numbers come from its own coordinates,
-//! so the image is the same bit for bit whatever the number of threads.
+//! The render driver: a model's runs over a set of rows, checkpoints, the thread pool and the
+//! settings. Each model renders its rows itself (the classic and photon models through the
+//! adaptive sampler of [`crate::integrator::adaptive`], the path tracer with
+//! [`crate::integrator::path::render_sums`], SPPM with [`crate::integrator::sppm::render_from`]).
 //!
 //! The physically based models are driven here too. The path tracer renders any set of rows
 //! ([`Rows`]) over any range of sample indices ([`path_sums`]): every sample draws from its own
@@ -30,7 +14,6 @@
 
 use std::ops::Range;
 
-mod adaptive;
 pub mod checkpoint;
 mod run;
 
@@ -44,25 +27,16 @@ use crate::base::image_io::Image;
 use crate::base::sampler::ExactSum;
 use crate::camera::Camera;
 use crate::integrator::Model;
+pub use crate::integrator::adaptive::{
+    CONTRAST_THRESHOLD, MAX_NESTED_FACTOR, NOISE_GRID, NOISE_THRESHOLD, REFINE_GRID, Sampling,
+};
 use crate::integrator::path::DEFAULT_MAX_DEPTH;
-use crate::integrator::photon::{self, PhotonStats};
-use crate::integrator::sppm::{self, SppmSettings, SppmStats};
+use crate::integrator::photon::{self};
+pub use crate::integrator::report::{Progress, RenderStats, Stage};
+use crate::integrator::sppm::{self, SppmSettings};
 use crate::prepare::{Hit, PreparedScene};
 use crate::scene::{Algorithm, Diagnostic, PhotonSettings, check_image_size};
 
-/// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
-pub const REFINE_GRID: u32 = 4;
-/// Side of the sample grid a pixel refined for noise alone adds to its first sample (4 samples,
-/// enough to spread the extra nested samples over the pixel's area).
-pub const NOISE_GRID: u32 = 2;
-/// Largest per-channel colour difference between neighbours that does not trigger refinement.
-pub const CONTRAST_THRESHOLD: f64 = 0.1;
-/// Largest estimated standard error of a pixel's first-pass colour that does not trigger
-/// refinement (two 8-bit steps).
-pub const NOISE_THRESHOLD: f64 = 2.0 / 255.0;
-/// Most nested samples (shadow rays, glossy directions) a refined pixel takes, as a multiple of a
-/// first-pass pixel's.
-pub const MAX_NESTED_FACTOR: u32 = 4;
 /// Largest `--spp`.
 pub const MAX_SPP: u32 = 1 << 20;
 /// Most independent runs of a render ([`RenderSettings::runs`]).
@@ -71,15 +45,6 @@ pub const MAX_RUNS: u32 = 1 << 16;
 pub const DEFAULT_PATH_SPP: u32 = 64;
 /// Deepest path `--max-depth` accepts.
 pub const MAX_DEPTH_LIMIT: u32 = 1000;
-
-/// How pixels are sampled.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Sampling {
-    /// One sample per pixel, then `REFINE_GRID^2` samples where an edge or a contrast is found.
-    Adaptive,
-    /// This many stratified samples in every pixel (`--spp N`).
-    Uniform(u32),
-}
 
 /// Settings of one render.
 #[derive(Clone, Debug, PartialEq)]
@@ -157,74 +122,6 @@ impl RenderSettings {
             Some((Algorithm::ProgressivePhotonMapping | Algorithm::StochasticProgressivePhotonMapping, _))
         );
         SppmSettings::new(&self.photon_settings(scene), progressive, self.passes, self.max_depth, self.seed)
-    }
-}
-
-/// The stage a progress report is about.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Stage {
-    /// Tracing photons from the lights (photon model; units are photons).
-    TracingPhotons,
-    /// Building the photon map's search tree (one unit).
-    BuildingPhotonMap,
-    /// Tracing every pixel.
-    Tracing,
-    /// Re-rendering the pixels on edges (adaptive mode).
-    Refining,
-    /// Path tracing (units are samples: pixels times samples a pixel).
-    Sampling,
-    /// SPPM passes (units are passes).
-    Passes,
-    /// Chunks of rows of a render that keeps a checkpoint (units are chunks).
-    Chunks,
-}
-
-/// A progress report: `done` of `total` units (rows while tracing, pixels while refining, samples
-/// while path tracing, passes of SPPM).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Progress {
-    /// The stage.
-    pub stage: Stage,
-    /// Units finished.
-    pub done: u64,
-    /// Units in the stage.
-    pub total: u64,
-}
-
-/// Counts of the work a render did.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RenderStats {
-    /// Rays traced: camera, reflected, refracted, glossy and shadow rays.
-    pub rays: u64,
-    /// Camera samples taken.
-    pub camera_samples: u64,
-    /// Pixels re-rendered by adaptive anti-aliasing.
-    pub refined_pixels: u64,
-    /// Worker threads used.
-    pub threads: usize,
-    /// Photon-map irradiance estimates (photon model).
-    pub lookups: u64,
-    /// The photon map's making (photon model).
-    pub photons: Option<PhotonStats>,
-    /// The passes and photons of an SPPM render.
-    pub sppm: Option<SppmStats>,
-}
-
-impl RenderStats {
-    /// Adds the work of another run or portion (threads are kept).
-    pub fn add(&mut self, other: &RenderStats) {
-        self.rays += other.rays;
-        self.camera_samples += other.camera_samples;
-        self.refined_pixels += other.refined_pixels;
-        self.lookups += other.lookups;
-        self.photons = match (self.photons, other.photons) {
-            (Some(a), Some(b)) => Some(a.add(&b)),
-            (a, b) => a.or(b),
-        };
-        self.sppm = match (self.sppm, other.sppm) {
-            (Some(a), Some(b)) => Some(a.add(&b)),
-            (a, b) => a.or(b),
-        };
     }
 }
 

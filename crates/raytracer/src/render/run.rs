@@ -4,18 +4,14 @@
 //! so a run's values do not depend on how its rows are grouped or when it was interrupted.
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicU64, Ordering};
 
-use rayon::prelude::*;
-
-use super::adaptive::AdaptiveSampler;
 use super::checkpoint::{self, Checkpoint, Estimate};
 use super::{Progress, RenderError, RenderSettings, RenderStats, Rows, Stage, camera_for};
-use crate::base::sampler::{ExactSum, PixelRng, hash_values, stream};
-use crate::integrator::path::PathTracer;
-use crate::integrator::photon::{self, PhotonEstimate};
+use crate::base::sampler::{ExactSum, hash_values, stream};
+use crate::integrator::Model;
+use crate::integrator::adaptive::{self, PixelSampling};
 use crate::integrator::sppm::{self, SppmSettings, SppmState};
-use crate::integrator::{Classic, Model};
+use crate::integrator::{path, photon};
 use crate::prepare::PreparedScene;
 
 /// The seed of run `run`: the render's seed for the first run (so that a render of one run is the
@@ -48,6 +44,12 @@ pub(super) fn render_rows_run(
         }
     };
     let photon_settings = settings.photon_settings(scene);
+    let pixels = PixelSampling {
+        camera: camera_for(scene, settings),
+        sampling: settings.sampling,
+        height: settings.height,
+        seed,
+    };
     // The photon map, built when the first chunk that needs it is rendered.
     let mut photon_map = None;
     let mut stats = RenderStats::default();
@@ -65,36 +67,34 @@ pub(super) fn render_rows_run(
                         let total = chunk.len() as u64 * spp;
                         let report = |done| chunk_progress(Progress { stage: Stage::Sampling, done, total });
                         report(0);
-                        let (sums, rays) = path_sums(scene, settings, chunk, samples, &report);
+                        let (sums, rays) = path::render_sums(
+                            scene,
+                            &pixels.camera,
+                            settings.seed,
+                            settings.max_depth,
+                            chunk,
+                            samples,
+                            &report,
+                        );
                         (
                             Estimate::Sums(sums, spp),
                             RenderStats { rays, camera_samples: total, ..RenderStats::default() },
                         )
                     }
                     Model::Photon => {
-                        let (map, photon_stats) = photon_map.get_or_insert_with(|| {
-                            let report = |done, total| {
-                                chunk_progress(Progress { stage: Stage::TracingPhotons, done, total })
-                            };
-                            let built = photon::build_photon_map(scene, &photon_settings, seed, &report);
-                            chunk_progress(Progress { stage: Stage::BuildingPhotonMap, done: 1, total: 1 });
-                            built
-                        });
-                        let integrator =
-                            Classic::with_photons(scene, PhotonEstimate::new(map, &photon_settings));
-                        let (colors, mut chunk_stats) =
-                            AdaptiveSampler::new(scene, integrator, settings, seed)
-                                .run(chunk, &chunk_progress);
-                        // The map's making counts once, with its first chunk.
-                        if stats.photons.is_none() {
-                            chunk_stats.photons = Some(*photon_stats);
-                        }
+                        let (colors, chunk_stats) = photon::render_rows(
+                            scene,
+                            &mut photon_map,
+                            &photon_settings,
+                            &pixels,
+                            chunk,
+                            &chunk_progress,
+                        );
                         (Estimate::Colors(colors), chunk_stats)
                     }
                     Model::Classic => {
                         let (colors, chunk_stats) =
-                            AdaptiveSampler::new(scene, Classic::new(scene), settings, seed)
-                                .run(chunk, &chunk_progress);
+                            adaptive::render_classic(scene, &pixels, chunk, &chunk_progress);
                         (Estimate::Colors(colors), chunk_stats)
                     }
                     Model::Sppm => unreachable!("SPPM runs are rendered by render_sppm_run"),
@@ -173,10 +173,8 @@ pub(super) fn render_sppm_run(
 }
 
 /// The exact sums of the path tracer's samples `samples` (sample indices) of every pixel of
-/// `rows` (in the order of [`Rows::ys`]), and the rays traced. Sample `s` of pixel `(x, y)` draws
-/// from its own stream (seed, pixel, `s`), so sums of disjoint sample ranges and rows merge
-/// ([`ExactSum::merge`]) into exactly the sums of one render. `progress(done)` reports samples
-/// finished (pixels times samples) from worker threads.
+/// `rows` (in the order of [`Rows::ys`]), and the rays traced: the path model's row loop
+/// ([`path::render_sums`]) with the settings' camera, seed and depth.
 pub fn path_sums(
     scene: &PreparedScene,
     settings: &RenderSettings,
@@ -185,31 +183,5 @@ pub fn path_sums(
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<ExactSum>, u64) {
     let camera = camera_for(scene, settings);
-    let tracer = PathTracer::new(scene, settings.max_depth);
-    let width = rows.width() as usize;
-    let ys: Vec<u32> = rows.ys().collect();
-    let mut sums = vec![ExactSum::default(); rows.len()];
-    let rays = AtomicU64::new(0);
-    let done = AtomicU64::new(0);
-    let per_row = width as u64 * (samples.end.saturating_sub(samples.start));
-    if width > 0 {
-        sums.par_chunks_mut(width).enumerate().for_each(|(row, sums)| {
-            let y = ys[row];
-            let mut row_rays = 0;
-            for (x, sum) in sums.iter_mut().enumerate() {
-                let x = x as u32;
-                for s in samples.clone() {
-                    let mut rng = PixelRng::for_sample(settings.seed, stream::PATH, x, y, s);
-                    let (dx, dy) = (rng.uniform(), rng.uniform());
-                    let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
-                    let result = tracer.radiance(camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
-                    sum.add(result.radiance);
-                    row_rays += result.rays;
-                }
-            }
-            rays.fetch_add(row_rays, Ordering::Relaxed);
-            progress(done.fetch_add(per_row, Ordering::Relaxed) + per_row);
-        });
-    }
-    (sums, rays.load(Ordering::Relaxed))
+    path::render_sums(scene, &camera, settings.seed, settings.max_depth, rows, samples, progress)
 }

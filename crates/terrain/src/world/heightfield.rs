@@ -128,6 +128,18 @@ fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a + (b - a) * t
 }
 
+/// The height of a cell's surface with corners `[h00, h10, h01, h11]` (`h10` one row on, `h01`
+/// one column on) at the fractions `fx` (along columns) and `fz` (along rows): triangles
+/// (h00, h10, h01) below the diagonal and (h01, h10, h11) above it, the split of the terrain's
+/// mesh at every level of detail.
+pub fn cell_surface([h00, h10, h01, h11]: [f32; 4], fx: f32, fz: f32) -> f32 {
+    if fx + fz <= 1.0 {
+        h00 + (h01 - h00) * fx + (h10 - h00) * fz
+    } else {
+        h11 + (h10 - h11) * (1.0 - fx) + (h01 - h11) * (1.0 - fz)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -18,75 +18,11 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 use super::Heightfield;
-use super::occlusion::{BlockFloors, BlockGrid, WaterOcclusion, block_floors};
+use super::chunk::{BlockGrid, block_floors};
+pub use super::chunk::{CHUNK_CELLS, Chunk, ChunkLevel, DrawRange, EDGE_COUNT};
+use super::heightfield::cell_surface;
+use super::occlusion::WaterOcclusion;
 use crate::camera::Frustum;
-
-/// Cells along a side of a chunk (the last chunk of a row or column may be smaller).
-pub const CHUNK_CELLS: u32 = 32;
-
-/// The four edges of a chunk, in the order of [`ChunkLevel::skirts`] and [`Chunk::edge_planes`]:
-/// its first (far, -z) row, its last (near, +z) row, its first (left, -x) column and its last
-/// (right, +x) column.
-pub const EDGE_COUNT: usize = 4;
-
-/// One level of detail of one chunk: its surface and its skirts, each a range of indices into
-/// its own compact block of vertices.
-///
-/// Each skirt is stored as two one-sided strips, one facing each side of the edge's vertical
-/// plane. Only the strip facing the camera can produce pixels (the other is culled as a back
-/// face), so a frame draws one strip per edge ([`TerrainMesh::select`]): the picture is the same
-/// as with two-sided skirts, for half of their triangles.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ChunkLevel {
-    /// The surface's triangles.
-    pub surface: DrawRange,
-    /// The skirts along the four edges ([`EDGE_COUNT`] order), each as `[strip facing toward
-    /// -axis, strip facing toward +axis]` (the axis is z for rows, x for columns).
-    pub skirts: [[DrawRange; 2]; EDGE_COUNT],
-    /// Largest vertical distance, in world units, between this level's visible surface and the
-    /// full-resolution one (never less than the finer levels').
-    pub error: f32,
-    /// The lowest height of this level's surface over each block of the chunk
-    /// ([`super::occlusion::block_floors`]).
-    pub block_floors: BlockFloors,
-}
-
-impl ChunkLevel {
-    /// Every range of this level: the surface, then the skirts' strips edge by edge.
-    pub fn ranges(&self) -> impl Iterator<Item = &DrawRange> {
-        std::iter::once(&self.surface).chain(self.skirts.iter().flatten())
-    }
-
-    /// Whether the level has no triangle above the water.
-    pub fn is_empty(&self) -> bool {
-        self.ranges().all(|range| range.index_count == 0)
-    }
-}
-
-/// A square of the terrain at all its levels of detail.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Chunk {
-    /// Lowest corner of the box around the chunk's geometry above the water.
-    pub min: Vec3,
-    /// Highest corner of that box.
-    pub max: Vec3,
-    /// The coordinates of the vertical planes of the four edges ([`EDGE_COUNT`] order): z of the
-    /// first and last rows, x of the first and last columns.
-    pub edge_planes: [f32; EDGE_COUNT],
-    /// Level 0 (every sample) first, then successively halved resolutions.
-    pub levels: Vec<ChunkLevel>,
-}
-
-/// What to draw for one part of a chunk at one level: a range of indices into a block of vertices.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct DrawRange {
-    /// First index in [`TerrainMesh::indices`].
-    pub first_index: u32,
-    /// Number of indices.
-    pub index_count: u32,
-    /// Added to every index to find the vertex in [`TerrainMesh::positions`].
-    pub base_vertex: u32,
-}
 
 /// What the level-of-detail choice needs to know about the view.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -436,12 +372,7 @@ fn level_errors(field: &Heightfield, rows: (u32, u32), columns: (u32, u32)) -> V
                     for c in ca..=cb {
                         let fz = (r - ra) as f32 / (rb - ra) as f32;
                         let fx = (c - ca) as f32 / (cb - ca) as f32;
-                        // The same split as the mesh: (a, b, c) below the diagonal, (c, b, d) above.
-                        let coarse = if fx + fz <= 1.0 {
-                            ha + (hc - ha) * fx + (hb - ha) * fz
-                        } else {
-                            hd + (hb - hd) * (1.0 - fx) + (hc - hd) * (1.0 - fz)
-                        };
+                        let coarse = cell_surface([ha, hb, hc, hd], fx, fz);
                         worst = worst.max((coarse.max(0.0) - visible(r, c)).abs());
                     }
                 }

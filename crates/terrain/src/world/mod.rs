@@ -5,6 +5,7 @@
 //! Nothing here touches the GPU: every function is pure and unit-tested.
 
 pub mod assets;
+pub mod chunk;
 pub mod export;
 pub mod heightfield;
 pub mod heightmap;

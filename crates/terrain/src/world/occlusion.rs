@@ -13,91 +13,8 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
-use super::Heightfield;
-use super::mesh::{CHUNK_CELLS, Chunk};
-
-/// Cells along a side of a block (a chunk is [`CHUNK_BLOCKS`] blocks a side).
-pub const BLOCK_CELLS: u32 = 4;
-
-/// Blocks along a side of a chunk.
-pub const CHUNK_BLOCKS: u32 = CHUNK_CELLS / BLOCK_CELLS;
-
-/// The floors of the blocks of one chunk level, row by row (`CHUNK_BLOCKS` a row); blocks outside
-/// the chunk are at minus infinity.
-pub type BlockFloors = [f32; (CHUNK_BLOCKS * CHUNK_BLOCKS) as usize];
-
-/// The floors of the blocks of the chunk spanning samples `rows.0..=rows.1` x
-/// `columns.0..=columns.1` for the level of detail whose samples are `row_samples` x
-/// `column_samples` (sample indices in the field): the lowest height of the level's surface over
-/// each block (or lower).
-pub fn block_floors(
-    field: &Heightfield,
-    (rows, columns): ((u32, u32), (u32, u32)),
-    row_samples: &[u32],
-    column_samples: &[u32],
-) -> BlockFloors {
-    let mut floors = [f32::NEG_INFINITY; (CHUNK_BLOCKS * CHUNK_BLOCKS) as usize];
-    let blocks = |(first, last): (u32, u32)| (last - first).div_ceil(BLOCK_CELLS);
-    for i in 0..blocks(rows) {
-        for j in 0..blocks(columns) {
-            floors[(i * CHUNK_BLOCKS + j) as usize] = f32::INFINITY;
-        }
-    }
-    // Each level cell lowers the floors of the blocks it overlaps to its lowest corner.
-    let overlapped =
-        |(a, b): (u32, u32), first: u32| (a - first) / BLOCK_CELLS..=(b - first - 1) / BLOCK_CELLS;
-    for pair in row_samples.windows(2) {
-        for step in column_samples.windows(2) {
-            let corners = [(pair[0], step[0]), (pair[0], step[1]), (pair[1], step[0]), (pair[1], step[1])];
-            let lowest = corners.iter().map(|&(r, c)| field.height(r, c)).fold(f32::INFINITY, f32::min);
-            for i in overlapped((pair[0], pair[1]), rows.0) {
-                for j in overlapped((step[0], step[1]), columns.0) {
-                    let floor = &mut floors[(i * CHUNK_BLOCKS + j) as usize];
-                    *floor = floor.min(lowest);
-                }
-            }
-        }
-    }
-    floors
-}
-
-/// Where a mesh's blocks lie in the world, and what surrounds the map.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BlockGrid {
-    /// x and z of sample (0, 0), the corner of the grid of samples.
-    pub origin: Vec2,
-    /// Distance between neighbouring samples, in world units.
-    pub cell_size: f32,
-    /// Cells along x and along z (one fewer than the samples).
-    pub cells: [u32; 2],
-    /// Chunks along x (chunks are numbered row by row).
-    pub chunk_columns: u32,
-    /// Whether a sample on the map's border is above the water: the land then ends in a wall a
-    /// ray from outside the map may pass under.
-    pub open_edges: bool,
-}
-
-impl BlockGrid {
-    /// The grid of `field`, whose chunks are `chunk_columns` a row.
-    pub fn new(field: &Heightfield, chunk_columns: u32) -> Self {
-        let (columns, rows) = (field.columns(), field.rows());
-        let border = (0..columns)
-            .flat_map(|c| [(0, c), (rows - 1, c)])
-            .chain((0..rows).flat_map(|r| [(r, 0), (r, columns - 1)]));
-        let first = field.point(0, 0);
-        Self {
-            origin: Vec2::new(first.x, first.z),
-            cell_size: field.cell_size(),
-            cells: [columns - 1, rows - 1],
-            chunk_columns,
-            open_edges: border.into_iter().any(|(r, c)| field.height(r, c) > 0.0),
-        }
-    }
-
-    fn blocks(&self) -> [usize; 2] {
-        self.cells.map(|cells| cells.div_ceil(BLOCK_CELLS) as usize)
-    }
-}
+use super::chunk::Chunk;
+pub use super::chunk::{BLOCK_CELLS, BlockFloors, BlockGrid, CHUNK_BLOCKS, block_floors};
 
 /// Heights relative to the eye's at which rays are tested, as fractions of the eye's height.
 const TEST_HEIGHTS: usize = 32;
@@ -372,7 +289,7 @@ mod tests {
     use crate::camera::{CameraPose, Frustum, Lens};
     use crate::config::SceneConfig;
     use crate::world::mesh::LodView;
-    use crate::world::{Heightmap, TerrainMesh};
+    use crate::world::{Heightfield, Heightmap, TerrainMesh};
 
     /// A 97 x 97 map: water (level 20) around a plateau at `plateau` (a grey level) over
     /// samples 8..89, with a lake (level 20) over the samples `lake` (rows and columns).

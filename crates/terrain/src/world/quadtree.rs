@@ -18,6 +18,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::Heightmap;
+use super::heightfield::cell_surface;
 use crate::camera::Frustum;
 use crate::config::SceneConfig;
 
@@ -26,7 +27,7 @@ use crate::config::SceneConfig;
 /// A patch is drawn at the level its nearest, roughest part needs, so smaller patches follow the
 /// view more closely and draw fewer triangles for the same error on screen. At the course
 /// island's start view, 4 cells draw 23,856 triangles of land where 8 drew 34,080 and 16 drew
-/// 52,832: lavapipe's frames are bound by their triangles (see the README's Speed), and patches
+/// 52,832: lavapipe's frames are bound by their triangles (see docs/terrain-speed-log.md), and patches
 /// of 4 cells drew the modern look's frames fastest on every map measured, the 8193 map's
 /// included. The price is the tree's size (a node per 16 cells: 1 byte a height sample, where
 /// patches of 16 cells took 0.06) and about 1 ms to choose the patches of an 8193 x 8193 map for
@@ -402,7 +403,7 @@ fn exact_error(
                 let fz = (r - r0) as f32 / (r1 - r0) as f32;
                 for c in c0..=c1 {
                     let fx = (c - c0) as f32 / (c1 - c0) as f32;
-                    let coarse = coarse_surface([h00, h10, h01, h11], fx, fz);
+                    let coarse = cell_surface([h00, h10, h01, h11], fx, fz);
                     worst = worst.max((coarse.max(0.0) - height(r, c).max(0.0)).abs());
                 }
             }
@@ -453,24 +454,13 @@ fn patch_deviation(
                     let (r, c) = (clamp_r(r0 + fr).min(r1), clamp_c(c0 + fc).min(c1));
                     let fz = (r - r0) as f32 / (r1 - r0) as f32;
                     let fx = (c - c0) as f32 / (c1 - c0) as f32;
-                    let coarse = coarse_surface([h00, h10, h01, h11], fx, fz);
+                    let coarse = cell_surface([h00, h10, h01, h11], fx, fz);
                     worst = worst.max((coarse - height(r, c)).abs());
                 }
             }
         }
     }
     worst
-}
-
-/// The height of a coarse cell's surface with corners `[h00, h10, h01, h11]` at the fractions
-/// `fx` (along columns) and `fz` (along rows): triangles (h00, h10, h01) below the diagonal and
-/// (h01, h10, h11) above it, split as the mesh splits them.
-fn coarse_surface([h00, h10, h01, h11]: [f32; 4], fx: f32, fz: f32) -> f32 {
-    if fx + fz <= 1.0 {
-        h00 + (h01 - h00) * fx + (h10 - h00) * fz
-    } else {
-        h11 + (h10 - h11) * (1.0 - fx) + (h01 - h11) * (1.0 - fz)
-    }
 }
 
 #[cfg(test)]

@@ -6,7 +6,6 @@ use std::fmt;
 use std::sync::Arc;
 
 use super::super::{PhotonSettings, Scene};
-use super::keys::*;
 use super::lexer::*;
 use super::*;
 use crate::base::diagnostic::{Diagnostic, Severity};
@@ -522,18 +521,6 @@ impl<'s> Parser<'s> {
             }
             None => block.push(entry),
         }
-    }
-
-    /// Turns a complete block into scene data.
-    pub(super) fn finish_block(&mut self, block: OpenBlock<'s>) {
-        let mut reader = BlockReader::new(block, self);
-        match reader.kind {
-            BlockKind::Background => reader.background(),
-            BlockKind::Camera => reader.camera(),
-            BlockKind::Light(kind) => reader.light(kind),
-            BlockKind::Primitive(kind) => reader.primitive(kind),
-        }
-        reader.finish();
     }
 }
 

@@ -16,6 +16,20 @@ use crate::light::Light;
 use crate::material::Material;
 use crate::scene::texture::{BUILTIN_PREFIX, Builtin, TextureRef, TextureSource};
 
+impl<'s> Parser<'s> {
+    /// Turns a complete block into scene data.
+    pub(super) fn finish_block(&mut self, block: OpenBlock<'s>) {
+        let mut reader = BlockReader::new(block, self);
+        match reader.kind {
+            BlockKind::Background => reader.background(),
+            BlockKind::Camera => reader.camera(),
+            BlockKind::Light(kind) => reader.light(kind),
+            BlockKind::Primitive(kind) => reader.primitive(kind),
+        }
+        reader.finish();
+    }
+}
+
 impl<'p, 's> BlockReader<'p, 's> {
     pub(super) fn background(&mut self) {
         if let Some(line) = self.parser.seen.background.replace(self.header.line) {

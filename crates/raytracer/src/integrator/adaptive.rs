@@ -1,32 +1,96 @@
 //! The pixel sampler of the classic model and the course's photon mapper: one sample a pixel,
-//! then refinement where the first pass finds an edge or noise (see the module documentation of
-//! [`crate::render`]), or a uniform number of stratified samples.
+//! then refinement where the first pass finds an edge or noise, or a uniform number of stratified
+//! samples.
 //!
 //! It renders any set of whole rows ([`Rows`]): the first pass also traces the rows just above and
 //! below each block (when the image has them), so that every pixel of the set compares itself
 //! with the same neighbours as in a render of the whole image and comes out the same bit for bit.
+//!
+//! Adaptive mode (the default) improves on the template's edge resampling: every pixel first takes
+//! one sample at its centre, recording a tag of what it saw (objects along the mirror and
+//! refraction chain, lit point lights) and an estimate of its own noise (from the spread of its
+//! area-light shadow rays and glossy directions). Then:
+//! - every pixel whose tag differs from a neighbour's (a geometry or shadow edge) or whose colour
+//!   differs from a neighbour's by more than [`CONTRAST_THRESHOLD`] (a texture or lighting edge)
+//!   is re-rendered with a jittered `REFINE_GRID x REFINE_GRID` grid of samples, which replaces
+//!   its first sample;
+//! - every other pixel whose estimated error exceeds [`NOISE_THRESHOLD`] (a penumbra or a busy
+//!   glossy reflection) keeps its first sample and adds a small `NOISE_GRID x NOISE_GRID` grid
+//!   whose shadow and glossy samples bring the total to as many as its error estimate asks for
+//!   (up to [`MAX_NESTED_FACTOR`] times the first pass's), the two averaged by their sample counts.
+//!
+//! (The template used a fixed 3 x 3 grid, on tag edges only.) Uniform mode takes the same number
+//! of stratified samples in every pixel.
+//!
+//! Rows are rendered in parallel, but each pixel's random numbers come from its own coordinates,
+//! so the image is the same bit for bit whatever the number of threads.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::{
-    CONTRAST_THRESHOLD, MAX_NESTED_FACTOR, NOISE_GRID, NOISE_THRESHOLD, Progress, REFINE_GRID,
-    RenderSettings, RenderStats, Rows, Sampling, Stage, camera_for,
-};
+use crate::base::rows::Rows;
 use crate::base::sampler::{PixelRng, Siblings, Strata};
 use crate::camera::Camera;
-use crate::integrator::Classic;
-use crate::integrator::classic::TraceContext;
+use crate::integrator::classic::{Classic, TraceContext};
+use crate::integrator::report::{Progress, RenderStats, Stage};
 use crate::prepare::PreparedScene;
+
+/// Side of the sample grid of a refined pixel in adaptive mode (16 samples).
+pub const REFINE_GRID: u32 = 4;
+/// Side of the sample grid a pixel refined for noise alone adds to its first sample (4 samples,
+/// enough to spread the extra nested samples over the pixel's area).
+pub const NOISE_GRID: u32 = 2;
+/// Largest per-channel colour difference between neighbours that does not trigger refinement.
+pub const CONTRAST_THRESHOLD: f64 = 0.1;
+/// Largest estimated standard error of a pixel's first-pass colour that does not trigger
+/// refinement (two 8-bit steps).
+pub const NOISE_THRESHOLD: f64 = 2.0 / 255.0;
+/// Most nested samples (shadow rays, glossy directions) a refined pixel takes, as a multiple of a
+/// first-pass pixel's.
+pub const MAX_NESTED_FACTOR: u32 = 4;
+
+/// How pixels are sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sampling {
+    /// One sample per pixel, then `REFINE_GRID^2` samples where an edge or a contrast is found.
+    Adaptive,
+    /// This many stratified samples in every pixel (`--spp N`).
+    Uniform(u32),
+}
+
+/// What the adaptive sampler needs of a render: its camera, how it samples pixels, the image's
+/// height (the rows that have neighbours) and the seed of every pixel's random numbers.
+#[derive(Clone, Debug)]
+pub struct PixelSampling {
+    /// The camera, at the image's size.
+    pub camera: Camera,
+    /// Adaptive or uniform sampling.
+    pub sampling: Sampling,
+    /// The image's height in pixels.
+    pub height: u32,
+    /// The seed of every pixel's random numbers.
+    pub seed: u64,
+}
+
+/// The classic model's row loop: the colours of the pixels of `rows` (row by row, in the order
+/// of [`Rows::ys`]) and what they took.
+pub fn render_classic(
+    scene: &PreparedScene,
+    pixels: &PixelSampling,
+    rows: &Rows,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> (Vec<DVec3>, RenderStats) {
+    AdaptiveSampler::new(Classic::new(scene), pixels).run(rows, progress)
+}
 
 /// Pass numbers, part of each pixel's random seed.
 const FIRST_PASS: u32 = 0;
 const REFINE_PASS: u32 = 1;
 
 /// Renders pixels with the classic model's recursion (with or without a photon map).
-pub(super) struct AdaptiveSampler<'s> {
+pub(crate) struct AdaptiveSampler<'s> {
     integrator: Classic<'s>,
     camera: Camera,
     sampling: Sampling,
@@ -38,19 +102,14 @@ pub(super) struct AdaptiveSampler<'s> {
 }
 
 impl<'s> AdaptiveSampler<'s> {
-    /// A sampler for the settings' image, drawing its random numbers from `seed`.
-    pub(super) fn new(
-        scene: &'s PreparedScene,
-        integrator: Classic<'s>,
-        settings: &RenderSettings,
-        seed: u64,
-    ) -> AdaptiveSampler<'s> {
+    /// A sampler of pixels for `integrator`.
+    pub(crate) fn new(integrator: Classic<'s>, pixels: &PixelSampling) -> AdaptiveSampler<'s> {
         AdaptiveSampler {
             integrator,
-            camera: camera_for(scene, settings),
-            sampling: settings.sampling,
-            height: settings.height,
-            seed,
+            camera: pixels.camera.clone(),
+            sampling: pixels.sampling,
+            height: pixels.height,
+            seed: pixels.seed,
             rays: AtomicU64::new(0),
             lookups: AtomicU64::new(0),
         }
@@ -58,7 +117,7 @@ impl<'s> AdaptiveSampler<'s> {
 
     /// The colours of the pixels of `rows` (row by row, in the order of [`Rows::ys`]) and what
     /// they took.
-    pub(super) fn run(&self, rows: &Rows, progress: &(dyn Fn(Progress) + Sync)) -> (Vec<DVec3>, RenderStats) {
+    pub(crate) fn run(&self, rows: &Rows, progress: &(dyn Fn(Progress) + Sync)) -> (Vec<DVec3>, RenderStats) {
         let w = rows.width() as usize;
         let (first_samples, track_tags) = match self.sampling {
             Sampling::Adaptive => (1, true),
