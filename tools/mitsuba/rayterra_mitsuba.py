@@ -2,7 +2,7 @@
 """Render a rayterra scene file with Mitsuba 3, as rayterra's physically based models read it.
 
 This is a check of rayterra, not a part of it: the same scene, converted key by key to Mitsuba 3's
-plugins (variant `scalar_rgb`), rendered by Mitsuba's own `path` integrator (`volpath` when a glass
+plugins (variant `scalar_rgb`, or `llvm_ad_rgb` with `--variant`), rendered by Mitsuba's own `path` integrator (`volpath` when a glass
 absorbs), so that rayterra's `--model path` and `--model sppm` can be compared with a renderer the
 field trusts. The reading of every key is the one in rayterra's docs/raytracer-models.md ("How it renders"):
 
@@ -28,7 +28,13 @@ Textures are not converted (the tool refuses textured scenes), nor are spheres o
 
 Usage:
     python tools/mitsuba/rayterra_mitsuba.py SCENE -o OUT.exr [--size WxH] [--spp N]
-        [--max-depth N] [--seed N] [--threads N]
+        [--max-depth N] [--seed N] [--threads N] [--variant scalar_rgb|llvm_ad_rgb]
+
+`--variant llvm_ad_rgb` is Mitsuba's vectorised CPU backend (Dr.Jit compiles the integrator into
+one kernel); it needs LLVM (`apt-get install libllvm19` and
+`DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1`). Its render time is measured up to
+the finished image (`dr.eval` and `dr.sync_thread`), with the kernel cache as it is: run it once
+first to time it warm.
 It prints one line: `mitsuba: render <seconds> s, load <seconds> s, <samples> samples`.
 """
 
@@ -328,7 +334,8 @@ def convert(mi, path, width=None, height=None, spp=64, max_depth=10, seed=0):
         if focus <= 0:
             probe = mi.load_dict({**scene, "sensor": sensor})
             hit = probe.ray_intersect(mi.Ray3f(o=eye, d=forward))
-            focus = float(hit.t) if hit.is_valid() else 1.0
+            valid = hit.is_valid() if isinstance(hit.is_valid(), bool) else bool(hit.is_valid()[0])
+            focus = (float(hit.t) if isinstance(hit.t, float) else float(hit.t[0])) if valid else 1.0
         sensor.update({"type": "thinlens", "aperture_radius": aperture, "focus_distance": focus})
     scene["sensor"] = sensor
     scene["integrator"] = {"type": "volpath" if state["media"] else "path", "max_depth": max_depth,
@@ -350,11 +357,13 @@ def main():
     parser.add_argument("--max-depth", type=int, default=10)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--threads", type=int, default=0, help="worker threads [default: one per core]")
+    parser.add_argument("--variant", default="scalar_rgb", choices=["scalar_rgb", "llvm_ad_rgb"],
+                        help="Mitsuba's variant [default: scalar_rgb]")
     args = parser.parse_args()
 
     import drjit as dr
     import mitsuba as mi
-    mi.set_variant("scalar_rgb")
+    mi.set_variant(args.variant)
     if args.threads > 0:
         dr.set_thread_count(args.threads)
     width, height = args.size or (None, None)
@@ -367,6 +376,8 @@ def main():
     scene = mi.load_dict(scene_dict)
     loaded = time.perf_counter()
     image = mi.render(scene, spp=args.spp, seed=args.seed)
+    dr.eval(image)
+    dr.sync_thread()
     rendered = time.perf_counter()
     mi.Bitmap(image).write(args.output)
     film = scene.sensors()[0].film().size()

@@ -1,11 +1,17 @@
 //! Physically based models' benchmark: `cargo bench -p raytracer --bench pbr`.
 //!
-//! 1. The path tracer against Mitsuba 3 (`scalar_rgb`, its `path` integrator, through
-//!    `tools/mitsuba/rayterra_mitsuba.py`) on `scenes/cornell-box.txt`, at the same size, samples
-//!    a pixel and depth, both on every core, in the same run: the runs alternate (ours, Mitsuba,
-//!    ours, ...) so that both see the same load on a shared machine, and the ratio of each pair is
-//!    printed with its median. Times are of the rendering alone (Mitsuba's own timer around
-//!    `mi.render`, ours around `raytracer::render`; loading is not counted on either side).
+//! 1. The path tracer against Mitsuba 3's two CPU variants, `llvm_ad_rgb` (vectorised: Dr.Jit
+//!    compiles the integrator into one kernel; warm, its kernel cache filled by a first run that is
+//!    not counted) and `scalar_rgb`, each with its `path` integrator through
+//!    `tools/mitsuba/rayterra_mitsuba.py`, on `scenes/cornell-box.txt`, at the same size, samples a
+//!    pixel, depth and Russian roulette, all on every core, in the same run: the runs alternate
+//!    (ours, llvm, scalar, ours, ...) so that all see the same load on a shared machine, and the
+//!    ratio of each round is printed with its median and range. Times are of the rendering alone
+//!    (Mitsuba's own timer around `mi.render` up to the finished image, ours around
+//!    `raytracer::render`; loading is not counted on either side). Ours also prints samples and
+//!    rays a second a core. Without LLVM (`DRJIT_LIBLLVM_PATH`, default
+//!    `/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1`) the bench says so and compares with
+//!    `scalar_rgb` alone.
 //! 2. SPPM on the course's `glass-trio-area-light.txt` at 640x380: the time of a render whose
 //!    caustics are clearly visible (32 passes of 250,000 photons), with passes and photons a
 //!    second.
@@ -39,9 +45,18 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// Mitsuba's render time in seconds, as its tool reports it.
-fn mitsuba(python: &Path, scene: &Path, out: &Path, threads: usize) -> Option<f64> {
+/// Mitsuba's render time in seconds with `variant`, as its tool reports it; `llvm` is the LLVM
+/// library Dr.Jit loads for the `llvm_ad_rgb` variant.
+fn mitsuba(
+    python: &Path,
+    variant: &str,
+    llvm: &Path,
+    scene: &Path,
+    out: &Path,
+    threads: usize,
+) -> Option<f64> {
     let result = Command::new(python)
+        .env("DRJIT_LIBLLVM_PATH", llvm)
         .arg(scene.parent()?.join("../tools/mitsuba/rayterra_mitsuba.py"))
         .arg(scene)
         .args(["-o", &out.to_string_lossy(), "--size", &format!("{}x{}", SIZE.0, SIZE.1)])
@@ -52,15 +67,23 @@ fn mitsuba(python: &Path, scene: &Path, out: &Path, threads: usize) -> Option<f6
             &DEPTH.to_string(),
             "--threads",
             &threads.to_string(),
+            "--variant",
+            variant,
         ])
         .output()
         .ok()?;
     let stdout = String::from_utf8_lossy(&result.stdout);
     if !result.status.success() {
-        eprintln!("the Mitsuba tool failed: {}", String::from_utf8_lossy(&result.stderr));
+        eprintln!("the Mitsuba tool ({variant}) failed: {}", String::from_utf8_lossy(&result.stderr));
         return None;
     }
     stdout.split_whitespace().skip_while(|w| *w != "render").nth(1)?.parse().ok()
+}
+
+/// The median, smallest and largest of `v` (not empty), as text.
+fn spread(v: &[f64]) -> String {
+    let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
+    format!("{:.3} ({lo:.3}-{hi:.3})", median(v.to_vec()))
 }
 
 fn main() {
@@ -82,42 +105,69 @@ fn main() {
         ..RenderSettings::for_scene(&scene)
     };
     let samples = (SIZE.0 * SIZE.1 * SPP) as f64;
+    let per_core = |count: f64, seconds: f64| count / seconds / threads as f64 / 1e6;
     println!(
-        "path tracer against Mitsuba 3 scalar_rgb: cornell-box.txt {}x{}, {SPP} spp, depth {DEPTH}, {threads} threads, {runs} pairs",
+        "path tracer against Mitsuba 3: cornell-box.txt {}x{}, {SPP} spp, depth {DEPTH}, {threads} threads, {runs} rounds",
         SIZE.0, SIZE.1
     );
+    let llvm = std::env::var_os("DRJIT_LIBLLVM_PATH")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"));
+    let mut variants = vec!["scalar_rgb"];
     let out = std::env::temp_dir().join("rayterra-bench-mitsuba.exr");
-    let (mut ratios, mut ours_all, mut theirs_all) = (Vec::new(), Vec::new(), Vec::new());
+    if !llvm.is_file() {
+        println!(
+            "**** no LLVM at {} (apt-get install libllvm19, or set DRJIT_LIBLLVM_PATH): compared with \
+             scalar_rgb alone ****",
+            llvm.display()
+        );
+    } else if mitsuba(&python, "llvm_ad_rgb", &llvm, &cornell, &out, threads).is_some() {
+        // That first run filled Dr.Jit's kernel cache: the rounds time it warm.
+        variants.insert(0, "llvm_ad_rgb");
+    }
+    let mut ours_all = Vec::new();
+    let mut rays_all = Vec::new();
+    let mut theirs: Vec<(&str, Vec<f64>, Vec<f64>)> =
+        variants.iter().map(|v| (*v, Vec::new(), Vec::new())).collect();
     for run in 0..runs {
         let started = Instant::now();
-        raytracer::render(&scene, &settings, &|_: Progress| {}).expect("render");
+        let rendered = raytracer::render(&scene, &settings, &|_: Progress| {}).expect("render");
         let ours = started.elapsed().as_secs_f64();
-        let Some(theirs) = mitsuba(&python, &cornell, &out, threads) else {
-            println!("  run {run}: ours {ours:.2} s; Mitsuba unavailable at {}", python.display());
-            ours_all.push(ours);
-            continue;
-        };
-        println!(
-            "  run {run}: ours {ours:.2} s ({:.3} M samples/s a core), Mitsuba {theirs:.2} s ({:.3} M samples/s a core), ratio {:.3}",
-            samples / ours / threads as f64 / 1e6,
-            samples / theirs / threads as f64 / 1e6,
-            ours / theirs
+        let rays = rendered.stats.rays as f64;
+        let mut line = format!(
+            "  round {run}: ours {ours:.2} s ({:.3} M samples/s a core, {:.2} M rays/s a core)",
+            per_core(samples, ours),
+            per_core(rays, ours)
         );
-        ratios.push(ours / theirs);
+        for (variant, times, ratios) in theirs.iter_mut() {
+            match mitsuba(&python, variant, &llvm, &cornell, &out, threads) {
+                Some(t) => {
+                    line += &format!(", {variant} {t:.2} s (ours/theirs {:.3})", ours / t);
+                    times.push(t);
+                    ratios.push(ours / t);
+                }
+                None => line += &format!(", {variant} unavailable at {}", python.display()),
+            }
+        }
+        println!("{line}");
         ours_all.push(ours);
-        theirs_all.push(theirs);
+        rays_all.push(rays / ours);
     }
     let ours = median(ours_all);
-    print!("median: ours {ours:.2} s, {:.3} M samples/s a core", samples / ours / threads as f64 / 1e6);
-    if !ratios.is_empty() {
-        let theirs = median(theirs_all);
-        println!(
-            "; Mitsuba {theirs:.2} s, {:.3} M samples/s a core; time ratio ours/Mitsuba {:.3} (median of pairs)",
-            samples / theirs / threads as f64 / 1e6,
-            median(ratios)
-        );
-    } else {
-        println!();
+    println!(
+        "median: ours {ours:.2} s, {:.3} M samples/s a core, {:.2} M rays/s a core",
+        per_core(samples, ours),
+        median(rays_all) / threads as f64 / 1e6
+    );
+    for (variant, times, ratios) in &theirs {
+        if !times.is_empty() {
+            println!(
+                "  {variant}: {:.2} s, {:.3} M samples/s a core; time ratio ours/{variant} {} (median, range of rounds)",
+                median(times.clone()),
+                per_core(samples, median(times.clone())),
+                spread(ratios)
+            );
+        }
     }
 
     let trio = root.join("../shared/course-assets/scenes/glass-trio-area-light.txt");
