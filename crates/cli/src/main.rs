@@ -4,6 +4,9 @@
 //! engine (`crates/terrain`). The libraries never print or exit; this binary turns their values,
 //! errors and progress callbacks into terminal output and exit codes.
 
+#[macro_use]
+mod say;
+
 mod merge;
 mod render;
 mod size;
@@ -40,11 +43,11 @@ fn stop_on_interrupt() {
     let installed = ctrlc::set_handler(|| {
         let removed = atomic_file::remove_unfinished();
         let what = if removed > 0 { "; the unfinished output file was removed" } else { "" };
-        eprintln!("\nrayterra: interrupted{what}");
+        errln!("\nrayterra: interrupted{what}");
         std::process::exit(INTERRUPTED);
     });
     if let Err(error) = installed {
-        eprintln!("warning: cannot handle Ctrl-C: {error}");
+        errln!("warning: cannot handle Ctrl-C: {error}");
     }
 }
 

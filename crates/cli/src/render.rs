@@ -184,10 +184,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     for dir in &args.textures {
         if !dir.is_dir() {
             let what = if dir.exists() { "is not a folder" } else { "does not exist" };
-            eprintln!(
-                "warning: --textures `{}` {what}; no texture or mesh is looked for there",
-                dir.display()
-            );
+            errln!("warning: --textures `{}` {what}; no texture or mesh is looked for there", dir.display());
         }
     }
     let search =
@@ -264,7 +261,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         if !args.quiet {
             let scene = &prepared.scene;
             let (primitives, lights) = (scene.primitives.len(), scene.lights.len());
-            println!(
+            outln!(
                 "{}: ok ({primitives} primitive{}, {lights} light{}, {}x{} pixels, {} model)",
                 source.name(),
                 plural(primitives),
@@ -350,11 +347,11 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     if let Some(checkpoint) = checkpoint {
         let path = checkpoint.path().to_path_buf();
         if let Err(e) = checkpoint.remove() {
-            eprintln!("warning: the render is written, but its checkpoint `{}` stays: {e}", path.display());
+            errln!("warning: the render is written, but its checkpoint `{}` stays: {e}", path.display());
         }
     }
     if let Some(p) = stats.photons.filter(|p| p.emitted < p.requested) {
-        eprintln!(
+        errln!(
             "warning: the photon map was full (`max_photons= {}`) after {} of the {} photons; the estimate \
              still divides by all {} (as the course's renderer does), so the image is about {:.1} times \
              darker than a map that held them all\n  = note: raise `max_photons=` or lower `emit_photons=` \
@@ -416,13 +413,13 @@ fn passes_and_runs(
 fn warn_unused_options(args: &RenderArgs, model: Model) {
     let name = model.name();
     if args.photons.is_some() && !model.uses_photons() {
-        eprintln!("warning: --photons has no effect on the {name} model");
+        errln!("warning: --photons has no effect on the {name} model");
     }
     if args.max_depth != DEFAULT_MAX_DEPTH && !model.is_physically_based() {
-        eprintln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
+        errln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
     }
     if args.spp.is_some() && model == Model::Sppm {
-        eprintln!(
+        errln!(
             "warning: --spp has no effect on the sppm model (one camera path a pixel a pass; use --passes)"
         );
     }
@@ -451,7 +448,7 @@ fn print_summary(
     prepare: Duration,
     render: Duration,
 ) {
-    println!("wrote {}", output.display());
+    outln!("wrote {}", output.display());
     if settings.model.is_physically_based() {
         print_physical_summary(pixels, settings, stats, prepare, render);
         return;
@@ -463,7 +460,7 @@ fn print_summary(
     }
     let seconds = render.saturating_sub(photon_phase).as_secs_f64().max(1e-9);
     let rays_per_second = stats.rays as f64 / seconds;
-    println!(
+    outln!(
         "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
         seconds,
         prepare.as_secs_f64(),
@@ -471,14 +468,14 @@ fn print_summary(
         stats.camera_samples,
         stats.refined_pixels,
     );
-    println!(
+    outln!(
         "{} rays, {:.1} M rays/s ({:.1} M rays/s per thread)",
         stats.rays,
         rays_per_second / 1e6,
         rays_per_second / 1e6 / stats.threads.max(1) as f64
     );
     if stats.photons.is_some() {
-        println!(
+        outln!(
             "{} photon-map lookups, {:.2} M lookups/s",
             stats.lookups,
             stats.lookups as f64 / seconds / 1e6
@@ -496,7 +493,7 @@ fn print_physical_summary(
 ) {
     let seconds = render.as_secs_f64().max(1e-9);
     let threads = stats.threads.max(1) as f64;
-    println!(
+    outln!(
         "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
         seconds,
         prepare.as_secs_f64(),
@@ -506,7 +503,7 @@ fn print_physical_summary(
     );
     match stats.sppm {
         Some(SppmStats { passes, photons, stored, mean_radius, photon_seconds, .. }) => {
-            println!(
+            outln!(
                 "{passes} passes of {} photons ({photons} emitted, {stored} stored, {:.1} s tracing them), \
                  {:.2} passes/s, {:.2} M photons/s; mean final radius {mean_radius:.4}",
                 photons / passes.max(1),
@@ -523,7 +520,7 @@ fn print_physical_summary(
                 1 => String::new(),
                 n => format!(" in each of {n} passes"),
             };
-            println!(
+            outln!(
                 "{spp} samples a pixel{}{passes}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
                 if default { " (default)" } else { "" },
                 stats.camera_samples,
@@ -532,7 +529,7 @@ fn print_physical_summary(
             );
         }
     }
-    println!(
+    outln!(
         "{} rays, {:.1} M rays/s ({:.1} M rays/s per thread)",
         stats.rays,
         stats.rays as f64 / seconds / 1e6,
@@ -547,7 +544,7 @@ fn print_photon_summary(p: &PhotonStats) {
     } else {
         format!("{} photons emitted", p.emitted)
     };
-    println!(
+    outln!(
         "{emitted} in {trace:.2} s ({:.1} M photons/s), {} stored ({}), search tree built in {:.2} s",
         p.emitted as f64 / trace.max(1e-9) / 1e6,
         p.stored,
@@ -572,7 +569,7 @@ fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
         };
         if *shown < MAX_KEPT_DIAGNOSTICS {
             *shown += 1;
-            eprintln!("{d}");
+            errln!("{d}");
         } else {
             *more += 1;
         }
@@ -585,7 +582,7 @@ fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
         parts.push(format!("{} more warning{} and notes", omitted.others, plural(omitted.others)));
     }
     if !parts.is_empty() {
-        eprintln!("... and {}\n", parts.join(" and "));
+        errln!("... and {}\n", parts.join(" and "));
     }
 }
 
@@ -595,6 +592,6 @@ fn plural(n: usize) -> &'static str {
 
 /// Prints an error and returns the failure exit code.
 fn fail(message: &str) -> ExitCode {
-    eprintln!("error: {message}");
+    errln!("error: {message}");
     ExitCode::FAILURE
 }

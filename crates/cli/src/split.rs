@@ -95,9 +95,9 @@ pub fn open_checkpoint(path: &Path, key: &str, rows: &Rows) -> Result<Checkpoint
     match checkpoint.resumed() {
         (0, 0) => {}
         (chunks, 0) => {
-            eprintln!("note: resuming from `{}`: {chunks} chunks of rows were done", path.display())
+            errln!("note: resuming from `{}`: {chunks} chunks of rows were done", path.display())
         }
-        (_, passes) => eprintln!("note: resuming from `{}` after {passes} SPPM passes", path.display()),
+        (_, passes) => errln!("note: resuming from `{}` after {passes} SPPM passes", path.display()),
     }
     Ok(checkpoint)
 }

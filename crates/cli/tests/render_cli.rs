@@ -479,3 +479,47 @@ fn sigterm_during_a_render_exits_130_without_output() {
     assert!(text(&out.stderr).contains("rayterra: interrupted"), "{}", text(&out.stderr));
     assert_eq!(file_names(dir.path()), ["scene.txt"]);
 }
+
+/// Runs `rayterra ARGS` in `dir` with its standard output (and, if `close_stderr`, its standard
+/// error) a pipe whose reading end is closed before it writes: what `rayterra ... | head -0`
+/// gives it.
+#[cfg(unix)]
+pub fn rayterra_into_closed_pipes(args: &[&str], dir: &Path, close_stderr: bool) -> Output {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run rayterra");
+    drop(child.stdout.take());
+    if close_stderr {
+        drop(child.stderr.take());
+    }
+    child.wait_with_output().expect("wait")
+}
+
+/// Issue 31, defect 3: a closed standard output (or error) is not an error of the work: the
+/// image is written, nothing panics, and the exit status is the work's.
+#[cfg(unix)]
+#[test]
+fn closed_output_streams_neither_panic_nor_lose_the_image() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    for close_stderr in [false, true] {
+        let _ = std::fs::remove_file(dir.path().join("a.png"));
+        let out = rayterra_into_closed_pipes(
+            &["render", "scene.txt", "--size", "8x6", "-o", "a.png"],
+            dir.path(),
+            close_stderr,
+        );
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "stderr closed: {close_stderr}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(image::open(dir.path().join("a.png")).is_ok(), "the image is written");
+    }
+    // An error is still an error.
+    let out = rayterra_into_closed_pipes(&["render", "missing.txt", "-o", "b.png"], dir.path(), true);
+    assert_eq!(out.status.code(), Some(1));
+}

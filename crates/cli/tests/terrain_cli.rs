@@ -322,3 +322,36 @@ fn running_out_of_memory_is_a_clear_error() {
     assert_fails(&output, 1, "memory");
     assert!(!out.exists(), "an image was written");
 }
+
+/// Issue 31, defect 3: `rayterra terrain --screenshot x.png 2>&1 | head -1` closes both streams
+/// after a line: the screenshot is still written, nothing panics, the exit status is 0.
+#[cfg(unix)]
+#[test]
+fn closed_output_streams_neither_panic_nor_lose_the_screenshot() {
+    use std::process::Stdio;
+    let out = scratch("closed-pipe.png");
+    let _ = std::fs::remove_file(&out);
+    let args =
+        ["terrain", "--screenshot", out.to_str().expect("utf-8 path"), "--size", "32x18", "--grid", "16"];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("XDG_RUNTIME_DIR")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("rayterra runs");
+    drop(child.stdout.take());
+    drop(child.stderr.take());
+    let status = child.wait().expect("wait");
+    if !status.success() {
+        // Why, with the streams open: no GPU is a skip, anything else a failure.
+        let output = rayterra(&args[1..]);
+        if no_gpu(&output) {
+            return;
+        }
+        panic!("with closed streams it exited with {status}; with open ones: {}", stderr(&output));
+    }
+    assert!(out.exists(), "the screenshot is written");
+}
