@@ -9,6 +9,7 @@ mod say;
 
 mod merge;
 mod render;
+mod same_file;
 mod size;
 mod split;
 mod terrain;

@@ -164,6 +164,24 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         .transpose()
         .map_err(|e| fail(&e))?;
     let is_part = tile.is_some() || pass.is_some();
+    if let Some(checkpoint) = &args.checkpoint {
+        // The checkpoint is removed once the output is written: the same file for both would
+        // delete the finished image.
+        if crate::same_file::same_file(checkpoint, &args.output) {
+            return Err(usage(&format!(
+                "--checkpoint `{}` and -o `{}` are the same file, which would be removed once written; \
+                 give the checkpoint a name of its own",
+                checkpoint.display(),
+                args.output.display()
+            )));
+        }
+        if let Some(scene) = &args.scene {
+            refuse_input_as(checkpoint, "--checkpoint", scene)?;
+        }
+    }
+    if let Some(scene) = args.scene.as_ref().filter(|_| !args.check) {
+        refuse_input_as(&args.output, "-o", scene)?;
+    }
     if is_part && format != OutputFormat::Exr {
         return Err(fail(&format!(
             "a tile or pass is written as a part file for `rayterra merge`: name the output `.exr`, not `{}`",
@@ -198,6 +216,14 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         ))
     })?;
     print_diagnostics(&prepared.diagnostics);
+    for input in &prepared.inputs {
+        if let Some(checkpoint) = &args.checkpoint {
+            refuse_input_as(checkpoint, "--checkpoint", input)?;
+        }
+        if !args.check {
+            refuse_input_as(&args.output, "-o", input)?;
+        }
+    }
     let prepare_time = started.elapsed();
 
     let mut settings = RenderSettings::for_scene(&prepared);
@@ -588,6 +614,24 @@ fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
 
 fn plural(n: usize) -> &'static str {
     if n == 1 { "" } else { "s" }
+}
+
+/// Refuses `path` (given as `flag`) when it is the same file as `input`, a file the render reads.
+fn refuse_input_as(path: &Path, flag: &str, input: &Path) -> Result<(), ExitCode> {
+    if crate::same_file::same_file(path, input) {
+        return Err(usage(&format!(
+            "{flag} `{}` is `{}`, which the render reads; writing it would destroy an input: give another name",
+            path.display(),
+            input.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Prints an error about the command line and returns the exit code of a usage error (2).
+pub fn usage(message: &str) -> ExitCode {
+    errln!("error: {message}");
+    ExitCode::from(2)
 }
 
 /// Prints an error and returns the failure exit code.

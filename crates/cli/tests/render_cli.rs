@@ -480,6 +480,57 @@ fn sigterm_during_a_render_exits_130_without_output() {
     assert_eq!(file_names(dir.path()), ["scene.txt"]);
 }
 
+/// Issue 31, defect 1: the checkpoint is removed once the image is written, so a checkpoint that
+/// is the output (under any name) or an input of the render would destroy it.
+#[test]
+fn a_checkpoint_or_output_that_is_another_file_of_the_render_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE.replace("builtin:marble", "stone.bmp"))
+        .expect("write scene");
+    image::RgbImage::from_pixel(4, 4, image::Rgb([200, 100, 50]))
+        .save(dir.path().join("stone.bmp"))
+        .expect("bmp");
+    let stone = std::fs::read(dir.path().join("stone.bmp")).expect("read");
+    let scene = std::fs::read(dir.path().join("scene.txt")).expect("read");
+    let abs = dir.path().join("a.png");
+    let abs = abs.to_str().expect("utf-8 path");
+    let cases: [(&[&str], &str); 6] = [
+        (&["-o", "a.png", "--checkpoint", "a.png"], "are the same file"),
+        (&["-o", "a.png", "--checkpoint", "./a.png"], "are the same file"),
+        (&["-o", abs, "--checkpoint", "a.png"], "are the same file"),
+        (&["-o", "a.png", "--checkpoint", "scene.txt"], "which the render reads"),
+        (&["-o", "a.png", "--checkpoint", "./stone.bmp"], "which the render reads"),
+        (&["-o", "stone.bmp", "--checkpoint", "c.ckpt"], "which the render reads"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", "scene.txt", "-q", "--size", "8x6"];
+        args.extend_from_slice(extra);
+        let out = rayterra(&args, dir.path());
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert!(!dir.path().join("a.png").exists() && !dir.path().join("c.ckpt").exists(), "{extra:?}");
+        assert_eq!(std::fs::read(dir.path().join("stone.bmp")).expect("read"), stone, "{extra:?}");
+        assert_eq!(std::fs::read(dir.path().join("scene.txt")).expect("read"), scene, "{extra:?}");
+    }
+    // An existing image named twice is the same file too, and is kept.
+    let out = rayterra(&["render", "scene.txt", "-q", "--size", "8x6", "-o", "a.png"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = rayterra(
+        &["render", "scene.txt", "-q", "--size", "8x6", "-o", "a.png", "--checkpoint", abs],
+        dir.path(),
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(dir.path().join("a.png").exists(), "the earlier image is kept");
+    // Distinct files are fine, and the checkpoint is gone afterwards.
+    let out = rayterra(
+        &["render", "scene.txt", "-q", "--size", "8x6", "-o", "b.png", "--checkpoint", "b.ckpt"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(dir.path().join("b.png").exists() && !dir.path().join("b.ckpt").exists());
+}
+
 /// Runs `rayterra ARGS` in `dir` with its standard output (and, if `close_stderr`, its standard
 /// error) a pipe whose reading end is closed before it writes: what `rayterra ... | head -0`
 /// gives it.
