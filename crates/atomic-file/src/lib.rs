@@ -10,6 +10,14 @@
 //!
 //! Errors name the target as the user gave it, never the temporary file, and an I/O error met
 //! while encoding (a full disk) is reported as such rather than as the encoder's own error.
+//!
+//! Reading goes through one gate too: [`open_regular`] opens a file only if it is a regular
+//! file, refusing folders, devices and named pipes at once (a pipe would otherwise wait forever
+//! for a writer).
+
+mod regular;
+
+pub use regular::{NotRegular, not_regular, open_regular, read_regular, read_regular_to_string};
 
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};

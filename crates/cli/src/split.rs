@@ -81,8 +81,8 @@ pub fn scene_digest(source: &SourceFile, inputs: &[PathBuf]) -> Result<String, S
     let mut digest = SceneDigest::new();
     digest.add("scene", source.text().as_bytes());
     for (i, path) in inputs.iter().enumerate() {
-        let bytes =
-            std::fs::read(path).map_err(|e| format!("cannot read `{}` again: {e}", path.display()))?;
+        let bytes = atomic_file::read_regular(path)
+            .map_err(|e| format!("cannot read `{}` again: {e}", path.display()))?;
         digest.add(&format!("input {i}"), &bytes);
     }
     Ok(digest.finish())

@@ -531,6 +531,63 @@ fn a_checkpoint_or_output_that_is_another_file_of_the_render_is_refused() {
     assert!(dir.path().join("b.png").exists() && !dir.path().join("b.ckpt").exists());
 }
 
+/// `rayterra ARGS` in `dir`, killed after `seconds` (`None`: it hung).
+#[cfg(unix)]
+fn rayterra_within(args: &[&str], dir: &Path, seconds: u64) -> Option<Output> {
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run rayterra");
+    let started = Instant::now();
+    while started.elapsed() < Duration::from_secs(seconds) {
+        if child.try_wait().expect("wait").is_some() {
+            return Some(child.wait_with_output().expect("output"));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+/// Issue 31, defect 2: named pipes (an OBJ's `mtllib`, `--checkpoint`, a part to merge, the scene
+/// itself) are refused at once instead of waiting forever for a writer.
+#[cfg(unix)]
+#[test]
+fn named_pipes_are_refused_without_waiting() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    for name in ["pipe.mtl", "pipe.ckpt", "pipe.exr", "pipe.txt"] {
+        let made = Command::new("mkfifo").arg(dir.path().join(name)).status().expect("mkfifo runs");
+        assert!(made.success());
+    }
+    std::fs::write(dir.path().join("m.obj"), "mtllib pipe.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+        .expect("write obj");
+    std::fs::write(
+        dir.path().join("mesh.txt"),
+        format!("{SMALL_SCENE}primitive mesh\n file= m.obj\n diff= 1\nend\n"),
+    )
+    .expect("write scene");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    let cases: [(&[&str], &str); 4] = [
+        (&["render", "mesh.txt", "--check"], "pipe.mtl"),
+        (&["render", "scene.txt", "--size", "8x6", "-o", "a.png", "--checkpoint", "pipe.ckpt"], "pipe.ckpt"),
+        (&["merge", "pipe.exr", "-o", "a.png"], "pipe.exr"),
+        (&["render", "pipe.txt", "-o", "a.png"], "pipe.txt"),
+    ];
+    for (args, needle) in cases {
+        let out = rayterra_within(args, dir.path(), 60).unwrap_or_else(|| panic!("{args:?} hung on a pipe"));
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains(needle) && stderr.contains("not a regular file"), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    assert!(!dir.path().join("a.png").exists());
+}
+
 /// Runs `rayterra ARGS` in `dir` with its standard output (and, if `close_stderr`, its standard
 /// error) a pipe whose reading end is closed before it writes: what `rayterra ... | head -0`
 /// gives it.

@@ -366,17 +366,18 @@ impl Settings {
     /// Reads settings from a TOML file (a regular file of at most [`MAX_SETTINGS_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, SettingsError> {
         let read_error = |source| SettingsError::Read { path: path.to_path_buf(), source };
-        let metadata = std::fs::metadata(path).map_err(read_error)?;
-        if !metadata.is_file() {
-            return Err(read_error(std::io::Error::other("not a regular file")));
-        }
+        // Never waits on a named pipe; a folder or device is refused.
+        let file = atomic_file::open_regular(path).map_err(read_error)?;
+        let metadata = file.metadata().map_err(read_error)?;
         if metadata.len() > MAX_SETTINGS_BYTES {
             return Err(read_error(std::io::Error::other(format!(
                 "{} bytes is too large for a settings file (at most {MAX_SETTINGS_BYTES})",
                 metadata.len()
             ))));
         }
-        let text = std::fs::read_to_string(path).map_err(read_error)?;
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_SETTINGS_BYTES + 1), &mut text)
+            .map_err(read_error)?;
         Self::from_toml(&text, path)
     }
 
@@ -436,7 +437,7 @@ mod tests {
     #[test]
     fn folders_devices_and_huge_files_are_refused_before_reading() {
         let error = Settings::load(&std::env::temp_dir()).expect_err("a folder").to_string();
-        assert!(error.contains("not a regular file"), "{error}");
+        assert!(error.contains("it is a directory"), "{error}");
         if Path::new("/dev/zero").exists() {
             let error = Settings::load(Path::new("/dev/zero")).expect_err("a device").to_string();
             assert!(error.contains("/dev/zero") && error.contains("not a regular file"), "{error}");

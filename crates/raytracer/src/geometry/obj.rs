@@ -108,11 +108,21 @@ pub struct ObjError {
 pub fn load_obj(path: &Path, transform: &MeshTransform) -> Result<LoadedObj, ObjError> {
     let file = path.display().to_string();
     let fail = |message: String| ObjError { file: file.clone(), line: None, message };
-    let size = std::fs::metadata(path).map_err(|e| fail(format!("cannot read it: {e}")))?.len();
+    let cannot_read = |e: std::io::Error| match atomic_file::not_regular(&e) {
+        Some(_) => fail(e.to_string()),
+        None => fail(format!("cannot read it: {e}")),
+    };
+    let opened = atomic_file::open_regular(path).map_err(cannot_read)?;
+    let size = opened.metadata().map_err(cannot_read)?.len();
     if size > MAX_OBJ_BYTES {
         return Err(fail(format!("it is {size} bytes; meshes of at most {MAX_OBJ_BYTES} bytes are read")));
     }
-    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read it: {e}")))?;
+    let mut bytes = Vec::with_capacity(size as usize);
+    // The bound is on what is read: the file may grow meanwhile.
+    opened.take(MAX_OBJ_BYTES + 1).read_to_end(&mut bytes).map_err(cannot_read)?;
+    if bytes.len() as u64 > MAX_OBJ_BYTES {
+        return Err(fail(format!("it is over {MAX_OBJ_BYTES} bytes; meshes of at most that are read")));
+    }
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse_obj(&bytes, &file, &dir, transform)
 }
@@ -256,11 +266,8 @@ pub fn parse_obj(
 /// The bytes of the material library at `path`, if it is a regular file of at most
 /// [`MAX_MTL_BYTES`] (not a device or a pipe that never ends); otherwise why not.
 fn read_material_library(path: &Path) -> Result<Vec<u8>, String> {
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let meta = file.metadata().map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        return Err("it is not a regular file".into());
-    }
+    // Refused unless a regular file, without waiting on a named pipe.
+    let file = atomic_file::open_regular(path).map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
     // A file may grow, or say it is empty (as those in /proc do): the bound is on what is read.
     file.take(MAX_MTL_BYTES + 1).read_to_end(&mut bytes).map_err(|e| e.to_string())?;
