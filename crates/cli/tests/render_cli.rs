@@ -631,3 +631,29 @@ fn closed_output_streams_neither_panic_nor_lose_the_image() {
     let out = rayterra_into_closed_pipes(&["render", "missing.txt", "-o", "b.png"], dir.path(), true);
     assert_eq!(out.status.code(), Some(1));
 }
+
+/// Issue 31, defect 6: an output path ending with a slash names a folder: refused before any
+/// work, by render (whole or a part) and merge.
+#[test]
+fn an_output_path_ending_with_a_slash_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    let out =
+        rayterra(&["render", "scene.txt", "-q", "--size", "8x6", "--tile", "0/1", "-o", "p.exr"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    for args in [
+        &["render", "scene.txt", "--size", "8x6", "-o", "out.png/"][..],
+        &["render", "scene.txt", "--size", "8x6", "-o", "out.png/."][..],
+        &["render", "scene.txt", "--size", "8x6", "--tile", "0/2", "-o", "part.exr/"][..],
+        &["merge", "p.exr", "-o", "out.png/"][..],
+    ] {
+        let out = rayterra(args, dir.path());
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains("names a folder"), "{args:?}: {stderr}");
+    }
+    let mut left: Vec<_> =
+        std::fs::read_dir(dir.path()).expect("list").map(|e| e.expect("entry").file_name()).collect();
+    left.sort();
+    assert_eq!(left, ["p.exr", "scene.txt"], "nothing written");
+}

@@ -396,6 +396,19 @@ fn named_pipes_are_refused_without_waiting() {
     assert!(!out.exists());
 }
 
+/// Issue 31, defect 6: a screenshot path ending with a slash is refused before any work.
+#[test]
+fn a_screenshot_path_ending_with_a_slash_is_refused_before_any_work() {
+    let out = scratch("slash.png");
+    let _ = std::fs::remove_file(&out);
+    let arg = format!("{}/", out.display());
+    // The largest grid: generating it would take many seconds before the write failed.
+    let output = rayterra_within(&["--screenshot", &arg, "--grid", "8193"], 60).expect("it stops at once");
+    assert_fails(&output, 1, "names a folder");
+    assert!(!stderr(&output).contains("world:"), "the world was made: {}", stderr(&output));
+    assert!(!out.exists());
+}
+
 /// Issue 31, defect 3: `rayterra terrain --screenshot x.png 2>&1 | head -1` closes both streams
 /// after a line: the screenshot is still written, nothing panics, the exit status is 0.
 #[cfg(unix)]
