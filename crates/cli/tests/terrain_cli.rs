@@ -441,3 +441,23 @@ fn closed_output_streams_neither_panic_nor_lose_the_screenshot() {
     }
     assert!(out.exists(), "the screenshot is written");
 }
+
+/// Issue 31, defect 7: an out-of-range value in a settings file names its line (before any GPU
+/// work).
+#[test]
+fn out_of_range_settings_name_their_line() {
+    let out = scratch("never-range.png");
+    let _ = std::fs::remove_file(&out);
+    let bad = scratch("range.toml");
+    std::fs::write(&bad, "look = \"modern\"\n[sun]\nintensity = 1\nelevation_degrees = 95\n").expect("write");
+    let output = rayterra(&[
+        "--settings",
+        bad.to_str().expect("utf-8 path"),
+        "--screenshot",
+        out.to_str().expect("utf-8 path"),
+        "--grid",
+        "8",
+    ]);
+    assert_fails(&output, 1, "range.toml:4: `sun.elevation_degrees` is 95");
+    assert!(!out.exists());
+}
