@@ -39,12 +39,27 @@ enum Command {
 /// Exit status after an interruption (SIGINT or SIGTERM), as shells report Ctrl-C.
 const INTERRUPTED: i32 = 130;
 
-/// On Ctrl-C or SIGTERM: remove the image being written, if any, say so and exit with 130.
+/// What to say after an interruption about the work kept (a checkpoint), if any.
+static KEPT_ON_INTERRUPT: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// Says `note` after an interruption from now on (`None`: nothing), e.g. that a checkpoint is
+/// kept and how to resume from it.
+pub fn on_interrupt_say(note: Option<String>) {
+    *KEPT_ON_INTERRUPT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = note;
+}
+
+/// On Ctrl-C or SIGTERM: remove the image being written, if any, say so (and what was kept) and
+/// exit with 130.
 fn stop_on_interrupt() {
     let installed = ctrlc::set_handler(|| {
         let removed = atomic_file::remove_unfinished();
         let what = if removed > 0 { "; the unfinished output file was removed" } else { "" };
         errln!("\nrayterra: interrupted{what}");
+        if let Some(note) =
+            KEPT_ON_INTERRUPT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).as_deref()
+        {
+            errln!("{note}");
+        }
         std::process::exit(INTERRUPTED);
     });
     if let Err(error) = installed {

@@ -36,7 +36,7 @@ pub fn run(args: MergeArgs) -> Result<(), ExitCode> {
     let started = Instant::now();
     let format = check_output(&args.output).map_err(|e| fail(&e.to_string()))?;
     if format.is_linear() && args.gamma {
-        eprintln!("warning: --gamma has no effect on linear {format:?} output");
+        errln!("warning: --gamma has no effect on linear {} output", crate::render::format_name(format));
     }
     let mut parts: Vec<(PathBuf, Part)> = Vec::with_capacity(args.parts.len());
     for path in &args.parts {

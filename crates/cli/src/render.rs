@@ -98,12 +98,12 @@ pub struct RenderArgs {
     /// (.exr) for `rayterra merge`. `auto`: K and N of a Slurm array task (SLURM_ARRAY_TASK_ID,
     /// SLURM_ARRAY_TASK_COUNT); `auto/N`: K from SLURM_ARRAY_TASK_ID or a Kubernetes Indexed
     /// Job's JOB_COMPLETION_INDEX.
-    #[arg(long, value_name = "K/N|auto|auto/N")]
+    #[arg(long, value_name = "K/N|auto|auto/N", value_parser = parse_split)]
     pub tile: Option<String>,
 
     /// Render pass K of N independent passes only (its own random numbers; see --runs) and write
     /// it as a part file (.exr) for `rayterra merge`; `auto` as for --tile. Combines with --tile.
-    #[arg(long, value_name = "K/N|auto|auto/N")]
+    #[arg(long, value_name = "K/N|auto|auto/N", value_parser = parse_split)]
     pub pass: Option<String>,
 
     /// Keep the finished work in FILE while rendering, and go on from it if FILE exists (a render
@@ -141,7 +141,17 @@ fn parse_model(text: &str) -> Result<Model, String> {
 
 /// Parses `--size`, up to the ray tracer's largest image side.
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    crate::size::parse_size(text, scene::MAX_IMAGE_SIDE)
+    let (w, h) = crate::size::parse_size(text, scene::MAX_IMAGE_SIDE)?;
+    // The pixel count too: a size the render refuses is a malformed option (exit status 2).
+    scene::check_image_size(w, h)?;
+    Ok((w, h))
+}
+
+/// Checks the form of `--tile` and `--pass` (`K/N`, `auto`, `auto/N`): a malformed one is a
+/// usage error (exit status 2). `auto` is resolved from the environment later.
+fn parse_split(text: &str) -> Result<String, String> {
+    crate::split::check_form(text)?;
+    Ok(text.to_owned())
 }
 
 /// Runs `rayterra render`.
@@ -197,7 +207,19 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         let n = e.error_count();
         fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
     })?;
-    print_diagnostics_with(&parsed.diagnostics, parsed.omitted);
+    // With --size, the file's own aspect warning names a size that is not rendered: it is given
+    // again below for the size that is.
+    let file_aspect = {
+        let cam = &parsed.scene.camera;
+        args.size.and_then(|_| scene::aspect_mismatch(cam, cam.image_width, cam.image_height))
+    };
+    let diagnostics: Vec<Diagnostic> = parsed
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error() || file_aspect.as_deref() != Some(d.message.as_str()))
+        .cloned()
+        .collect();
+    print_diagnostics_with(&diagnostics, parsed.omitted);
 
     for dir in &args.textures {
         if !dir.is_dir() {
@@ -228,12 +250,9 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
 
     let mut settings = RenderSettings::for_scene(&prepared);
     if let Some((w, h)) = args.size {
-        // The parser already warned about the file's own aspect; warn again only if the new size
-        // changes it.
-        let cam = &prepared.scene.camera;
-        let same_aspect = w as u64 * cam.image_height as u64 == h as u64 * cam.image_width as u64;
-        if let Some(message) = scene::aspect_mismatch(cam, w, h).filter(|_| !same_aspect) {
-            eprintln!("warning: with --size {w}x{h}, {message}");
+        // The size rendered, instead of the file's (whose warning was left out above).
+        if let Some(message) = scene::aspect_mismatch(&prepared.scene.camera, w, h) {
+            errln!("warning: with --size {w}x{h}, {message}");
         }
         settings.width = w;
         settings.height = h;
@@ -280,7 +299,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         fail(&format!("`{}` asks for more memory than a render may use; nothing was rendered", source.name()))
     })?;
     if format.is_linear() && args.gamma {
-        eprintln!("warning: --gamma has no effect on linear {format:?} output");
+        errln!("warning: --gamma has no effect on linear {} output", crate::render::format_name(format));
     }
 
     if args.check {
@@ -341,7 +360,13 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let mut checkpoint = match &args.checkpoint {
         Some(path) => {
             let key = format!("scene {scene_digest}\nsettings {settings_line}\ntile {tile}\npass {pass}");
-            Some(crate::split::open_checkpoint(path, &key, &rows).map_err(|e| fail(&e))?)
+            let opened = crate::split::open_checkpoint(path, &key, &rows).map_err(|e| fail(&e))?;
+            crate::on_interrupt_say(Some(format!(
+                "note: the checkpoint `{}` is kept with the work done so far; run the same command again \
+                 to go on from it",
+                path.display()
+            )));
+            Some(opened)
         }
         None => None,
     };
@@ -371,6 +396,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
     }
     if let Some(checkpoint) = checkpoint {
+        crate::on_interrupt_say(None);
         let path = checkpoint.path().to_path_buf();
         if let Err(e) = checkpoint.remove() {
             errln!("warning: the render is written, but its checkpoint `{}` stays: {e}", path.display());
@@ -626,6 +652,16 @@ fn refuse_input_as(path: &Path, flag: &str, input: &Path) -> Result<(), ExitCode
         )));
     }
     Ok(())
+}
+
+/// The name of an output format, for messages.
+pub fn format_name(format: OutputFormat) -> &'static str {
+    match format {
+        OutputFormat::Png => "PNG",
+        OutputFormat::Bmp => "BMP",
+        OutputFormat::Exr => "EXR",
+        OutputFormat::Hdr => "HDR",
+    }
 }
 
 /// Prints an error about the command line and returns the exit code of a usage error (2).

@@ -180,7 +180,7 @@ fn bad_requests_are_refused_without_output() {
     std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
     let cases: [(&[&str], i32, &str); 8] = [
         (&["render", "scene.txt", "--size", "100000x100000"], 2, "out of range"),
-        (&["render", "scene.txt", "--size", "30000x30000"], 1, "too large"),
+        (&["render", "scene.txt", "--size", "30000x30000"], 2, "too large"),
         (&["render", "scene.txt", "--size", "12"], 2, "expected WIDTHxHEIGHT"),
         (&["render", "scene.txt", "-o", "out.gif"], 1, "use .png, .bmp, .exr or .hdr"),
         (&["render", "scene.txt", "--spp", "0"], 2, "--spp"),
@@ -656,4 +656,79 @@ fn an_output_path_ending_with_a_slash_is_refused_before_any_work() {
         std::fs::read_dir(dir.path()).expect("list").map(|e| e.expect("entry").file_name()).collect();
     left.sort();
     assert_eq!(left, ["p.exr", "scene.txt"], "nothing written");
+}
+
+/// Issue 31, defect 11: malformed options exit with status 2; messages have no debug formatting;
+/// the aspect warning names the size rendered.
+#[test]
+fn small_ones_exit_codes_plain_messages_and_the_size_rendered() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    for args in [
+        &["render", "scene.txt", "--size", "8200x8200"][..],
+        &["render", "scene.txt", "--tile", "3/2", "-o", "t.exr"][..],
+        &["render", "scene.txt", "--pass", "auto/0", "-o", "t.exr"][..],
+    ] {
+        let out = rayterra(args, dir.path());
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", text(&out.stderr));
+    }
+    let out = rayterra(&["render", "scene.txt", "-q", "--size", "8x6", "--gamma", "-o", "a.exr"], dir.path());
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("no effect on linear EXR output"), "{stderr}");
+    // A square lens on a 40x30 image: the file's size is not the one rendered.
+    let square = SMALL_SCENE.replace(" lens_W= 0.8\n lens_H= 0.6\n", " lens_W= 1\n lens_H= 1\n");
+    std::fs::write(dir.path().join("square.txt"), square).expect("write scene");
+    let out = rayterra(&["render", "square.txt", "-q", "--size", "20x20", "-o", "s.png"], dir.path());
+    let stderr = text(&out.stderr);
+    assert!(out.status.success() && !stderr.contains("aspect"), "{stderr}");
+    let out = rayterra(&["render", "square.txt", "-q", "--size", "80x60", "-o", "s.png"], dir.path());
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("image aspect 80/60") && !stderr.contains("40/30"), "{stderr}");
+    assert_eq!(stderr.matches("aspect").count(), 2, "one warning: {stderr}");
+    // A PNG texture with a broken checksum: the decoder's message names the chunk plainly.
+    let mut png = Vec::new();
+    image::RgbImage::from_pixel(4, 4, image::Rgb([9, 9, 9]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("png");
+    png[30] ^= 0xff; // In IHDR's CRC.
+    std::fs::write(dir.path().join("bad.png"), &png).expect("write");
+    std::fs::write(dir.path().join("bad.txt"), SMALL_SCENE.replace("builtin:marble", "bad.png"))
+        .expect("write");
+    let out = rayterra(&["render", "bad.txt", "--check"], dir.path());
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("IHDR") && !stderr.contains("ChunkType") && !stderr.contains("critical:"),
+        "{stderr}"
+    );
+}
+
+/// Issue 31, defect 11: after Ctrl-C, a render with `--checkpoint` says the checkpoint is kept and
+/// how to go on.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_render_says_its_checkpoint_is_kept() {
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SLOW_SCENE).expect("write scene");
+    let child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(["render", "scene.txt", "-q", "--size", "2048x2048", "-o", "out.png", "--checkpoint", "c.ckpt"])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run rayterra");
+    let started = Instant::now();
+    while !dir.path().join("c.ckpt").exists() && started.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    send_signal(&child, "-INT");
+    let out = child.wait_with_output().expect("wait");
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("the checkpoint `c.ckpt` is kept") && stderr.contains("run the same command again"),
+        "{stderr}"
+    );
+    assert!(dir.path().join("c.ckpt").exists());
+    assert!(!dir.path().join("out.png").exists());
 }
