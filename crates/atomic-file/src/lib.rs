@@ -10,6 +10,14 @@
 //!
 //! Errors name the target as the user gave it, never the temporary file, and an I/O error met
 //! while encoding (a full disk) is reported as such rather than as the encoder's own error.
+//!
+//! Reading goes through one gate too: [`open_regular`] opens a file only if it is a regular
+//! file, refusing folders, devices and named pipes at once (a pipe would otherwise wait forever
+//! for a writer).
+
+mod regular;
+
+pub use regular::{NotRegular, not_regular, open_regular, read_regular, read_regular_to_string};
 
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
@@ -43,6 +51,15 @@ pub enum WriteError<E: std::error::Error + 'static> {
     /// The target is a folder.
     #[error("cannot write `{}`: it is a directory", .path.display())]
     TargetIsDirectory {
+        /// The target.
+        path: PathBuf,
+    },
+    /// The target's form names a folder, not a file: it ends with a slash, `.` or `..`.
+    #[error(
+        "cannot write `{}`: a path ending with `/`, `.` or `..` names a folder; give a file name",
+        .path.display()
+    )]
+    NotAFileName {
         /// The target.
         path: PathBuf,
     },
@@ -86,6 +103,16 @@ pub fn remove_unfinished() -> usize {
     removed
 }
 
+/// Whether `path`'s form names a file: it does not end with a separator, `.` or `..` (which name
+/// folders, whatever exists on disk: `out.png/` cannot be created as a file).
+fn names_a_file(path: &Path) -> bool {
+    let text = path.as_os_str().as_encoded_bytes();
+    let ends_with_separator = text.last().is_some_and(|&b| b == b'/' || (cfg!(windows) && b == b'\\'));
+    !ends_with_separator
+        && matches!(path.components().next_back(), Some(std::path::Component::Normal(_)))
+        && !text.ends_with(b"/.")
+}
+
 /// The folder a file path lives in (`.` for a bare file name).
 fn folder_of(path: &Path) -> &Path {
     match path.parent() {
@@ -116,6 +143,9 @@ fn create_temporary(folder: &Path) -> io::Result<tempfile::NamedTempFile> {
 /// Checks that `path` can be written, before any long work whose result it is to hold: its
 /// folder exists and takes a new file, and `path` is not a folder. Nothing is left behind.
 pub fn check_writable<E: std::error::Error + 'static>(path: &Path) -> Result<(), WriteError<E>> {
+    if !names_a_file(path) {
+        return Err(WriteError::NotAFileName { path: path.to_path_buf() });
+    }
     let folder = folder_of(path);
     match std::fs::metadata(folder) {
         Err(e) if e.kind() == io::ErrorKind::NotFound => {
@@ -244,6 +274,9 @@ pub fn write_atomically<E: std::error::Error + 'static>(
     encode: impl FnOnce(&mut Writer<&mut File>) -> Result<(), E>,
 ) -> Result<(), WriteError<E>> {
     let io = |source| WriteError::Io { path: path.to_path_buf(), source };
+    if !names_a_file(path) {
+        return Err(WriteError::NotAFileName { path: path.to_path_buf() });
+    }
     let folder = folder_of(path);
     if !folder.is_dir() {
         return Err(if folder.exists() {
@@ -346,6 +379,15 @@ mod tests {
             check_writable::<GaveUp>(&dir.path().join("file/out.png")).expect_err("not a folder").to_string();
         assert!(err.contains("is not a folder"), "{err}");
         check_writable::<GaveUp>(&dir.path().join("fine.png")).expect("writable");
+        // Issue 31, defect 6: a trailing slash (or `.`, `..`) names a folder, though the folder
+        // `dir/out.png` does not exist and the parent `dir` does.
+        for bad in ["out.png/", "out.png/.", "sub/..", ".", "out.png//"] {
+            let path = PathBuf::from(format!("{}/{bad}", dir.path().display()));
+            let err = check_writable::<GaveUp>(&path).expect_err(bad);
+            assert!(matches!(err, WriteError::NotAFileName { .. }), "{bad}: {err}");
+            let err = write_atomically(&path, |w| w.write_all(b"x")).expect_err(bad);
+            assert!(err.to_string().contains("names a folder"), "{bad}: {err}");
+        }
         assert_eq!(files_in(dir.path()), ["file"], "checking leaves nothing behind");
     }
 

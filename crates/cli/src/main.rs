@@ -4,8 +4,12 @@
 //! engine (`crates/terrain`). The libraries never print or exit; this binary turns their values,
 //! errors and progress callbacks into terminal output and exit codes.
 
+#[macro_use]
+mod say;
+
 mod merge;
 mod render;
+mod same_file;
 mod size;
 mod split;
 mod terrain;
@@ -35,16 +39,31 @@ enum Command {
 /// Exit status after an interruption (SIGINT or SIGTERM), as shells report Ctrl-C.
 const INTERRUPTED: i32 = 130;
 
-/// On Ctrl-C or SIGTERM: remove the image being written, if any, say so and exit with 130.
+/// What to say after an interruption about the work kept (a checkpoint), if any.
+static KEPT_ON_INTERRUPT: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// Says `note` after an interruption from now on (`None`: nothing), e.g. that a checkpoint is
+/// kept and how to resume from it.
+pub fn on_interrupt_say(note: Option<String>) {
+    *KEPT_ON_INTERRUPT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()) = note;
+}
+
+/// On Ctrl-C or SIGTERM: remove the image being written, if any, say so (and what was kept) and
+/// exit with 130.
 fn stop_on_interrupt() {
     let installed = ctrlc::set_handler(|| {
         let removed = atomic_file::remove_unfinished();
         let what = if removed > 0 { "; the unfinished output file was removed" } else { "" };
-        eprintln!("\nrayterra: interrupted{what}");
+        errln!("\nrayterra: interrupted{what}");
+        if let Some(note) =
+            KEPT_ON_INTERRUPT.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).as_deref()
+        {
+            errln!("{note}");
+        }
         std::process::exit(INTERRUPTED);
     });
     if let Err(error) = installed {
-        eprintln!("warning: cannot handle Ctrl-C: {error}");
+        errln!("warning: cannot handle Ctrl-C: {error}");
     }
 }
 

@@ -36,7 +36,7 @@ pub fn run(args: MergeArgs) -> Result<(), ExitCode> {
     let started = Instant::now();
     let format = check_output(&args.output).map_err(|e| fail(&e.to_string()))?;
     if format.is_linear() && args.gamma {
-        eprintln!("warning: --gamma has no effect on linear {format:?} output");
+        errln!("warning: --gamma has no effect on linear {} output", crate::render::format_name(format));
     }
     let mut parts: Vec<(PathBuf, Part)> = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
@@ -47,8 +47,8 @@ pub fn run(args: MergeArgs) -> Result<(), ExitCode> {
     write_image(&image, &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
     if !args.quiet {
         let h = &parts[0].1.header;
-        println!("wrote {}", args.output.display());
-        println!(
+        outln!("wrote {}", args.output.display());
+        outln!(
             "{}x{} pixels from {} parts ({} tile{} x {} pass{}) in {:.2} s",
             h.width,
             h.height,
@@ -65,6 +65,6 @@ pub fn run(args: MergeArgs) -> Result<(), ExitCode> {
 
 /// Prints an error and returns the failure exit code.
 fn fail(message: &str) -> ExitCode {
-    eprintln!("error: {message}");
+    errln!("error: {message}");
     ExitCode::FAILURE
 }

@@ -98,12 +98,12 @@ pub struct RenderArgs {
     /// (.exr) for `rayterra merge`. `auto`: K and N of a Slurm array task (SLURM_ARRAY_TASK_ID,
     /// SLURM_ARRAY_TASK_COUNT); `auto/N`: K from SLURM_ARRAY_TASK_ID or a Kubernetes Indexed
     /// Job's JOB_COMPLETION_INDEX.
-    #[arg(long, value_name = "K/N|auto|auto/N")]
+    #[arg(long, value_name = "K/N|auto|auto/N", value_parser = parse_split)]
     pub tile: Option<String>,
 
     /// Render pass K of N independent passes only (its own random numbers; see --runs) and write
     /// it as a part file (.exr) for `rayterra merge`; `auto` as for --tile. Combines with --tile.
-    #[arg(long, value_name = "K/N|auto|auto/N")]
+    #[arg(long, value_name = "K/N|auto|auto/N", value_parser = parse_split)]
     pub pass: Option<String>,
 
     /// Keep the finished work in FILE while rendering, and go on from it if FILE exists (a render
@@ -141,7 +141,17 @@ fn parse_model(text: &str) -> Result<Model, String> {
 
 /// Parses `--size`, up to the ray tracer's largest image side.
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    crate::size::parse_size(text, scene::MAX_IMAGE_SIDE)
+    let (w, h) = crate::size::parse_size(text, scene::MAX_IMAGE_SIDE)?;
+    // The pixel count too: a size the render refuses is a malformed option (exit status 2).
+    scene::check_image_size(w, h)?;
+    Ok((w, h))
+}
+
+/// Checks the form of `--tile` and `--pass` (`K/N`, `auto`, `auto/N`): a malformed one is a
+/// usage error (exit status 2). `auto` is resolved from the environment later.
+fn parse_split(text: &str) -> Result<String, String> {
+    crate::split::check_form(text)?;
+    Ok(text.to_owned())
 }
 
 /// Runs `rayterra render`.
@@ -164,6 +174,24 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         .transpose()
         .map_err(|e| fail(&e))?;
     let is_part = tile.is_some() || pass.is_some();
+    if let Some(checkpoint) = &args.checkpoint {
+        // The checkpoint is removed once the output is written: the same file for both would
+        // delete the finished image.
+        if crate::same_file::same_file(checkpoint, &args.output) {
+            return Err(usage(&format!(
+                "--checkpoint `{}` and -o `{}` are the same file, which would be removed once written; \
+                 give the checkpoint a name of its own",
+                checkpoint.display(),
+                args.output.display()
+            )));
+        }
+        if let Some(scene) = &args.scene {
+            refuse_input_as(checkpoint, "--checkpoint", scene)?;
+        }
+    }
+    if let Some(scene) = args.scene.as_ref().filter(|_| !args.check) {
+        refuse_input_as(&args.output, "-o", scene)?;
+    }
     if is_part && format != OutputFormat::Exr {
         return Err(fail(&format!(
             "a tile or pass is written as a part file for `rayterra merge`: name the output `.exr`, not `{}`",
@@ -179,15 +207,24 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         let n = e.error_count();
         fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
     })?;
-    print_diagnostics_with(&parsed.diagnostics, parsed.omitted);
+    // With --size, the file's own aspect warning names a size that is not rendered: it is given
+    // again below for the size that is.
+    let file_aspect = {
+        let cam = &parsed.scene.camera;
+        args.size.and_then(|_| scene::aspect_mismatch(cam, cam.image_width, cam.image_height))
+    };
+    let diagnostics: Vec<Diagnostic> = parsed
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error() || file_aspect.as_deref() != Some(d.message.as_str()))
+        .cloned()
+        .collect();
+    print_diagnostics_with(&diagnostics, parsed.omitted);
 
     for dir in &args.textures {
         if !dir.is_dir() {
             let what = if dir.exists() { "is not a folder" } else { "does not exist" };
-            eprintln!(
-                "warning: --textures `{}` {what}; no texture or mesh is looked for there",
-                dir.display()
-            );
+            errln!("warning: --textures `{}` {what}; no texture or mesh is looked for there", dir.display());
         }
     }
     let search =
@@ -201,16 +238,21 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         ))
     })?;
     print_diagnostics(&prepared.diagnostics);
+    for input in &prepared.inputs {
+        if let Some(checkpoint) = &args.checkpoint {
+            refuse_input_as(checkpoint, "--checkpoint", input)?;
+        }
+        if !args.check {
+            refuse_input_as(&args.output, "-o", input)?;
+        }
+    }
     let prepare_time = started.elapsed();
 
     let mut settings = RenderSettings::for_scene(&prepared);
     if let Some((w, h)) = args.size {
-        // The parser already warned about the file's own aspect; warn again only if the new size
-        // changes it.
-        let cam = &prepared.scene.camera;
-        let same_aspect = w as u64 * cam.image_height as u64 == h as u64 * cam.image_width as u64;
-        if let Some(message) = scene::aspect_mismatch(cam, w, h).filter(|_| !same_aspect) {
-            eprintln!("warning: with --size {w}x{h}, {message}");
+        // The size rendered, instead of the file's (whose warning was left out above).
+        if let Some(message) = scene::aspect_mismatch(&prepared.scene.camera, w, h) {
+            errln!("warning: with --size {w}x{h}, {message}");
         }
         settings.width = w;
         settings.height = h;
@@ -257,14 +299,14 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         fail(&format!("`{}` asks for more memory than a render may use; nothing was rendered", source.name()))
     })?;
     if format.is_linear() && args.gamma {
-        eprintln!("warning: --gamma has no effect on linear {format:?} output");
+        errln!("warning: --gamma has no effect on linear {} output", crate::render::format_name(format));
     }
 
     if args.check {
         if !args.quiet {
             let scene = &prepared.scene;
             let (primitives, lights) = (scene.primitives.len(), scene.lights.len());
-            println!(
+            outln!(
                 "{}: ok ({primitives} primitive{}, {lights} light{}, {}x{} pixels, {} model)",
                 source.name(),
                 plural(primitives),
@@ -318,7 +360,13 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let mut checkpoint = match &args.checkpoint {
         Some(path) => {
             let key = format!("scene {scene_digest}\nsettings {settings_line}\ntile {tile}\npass {pass}");
-            Some(crate::split::open_checkpoint(path, &key, &rows).map_err(|e| fail(&e))?)
+            let opened = crate::split::open_checkpoint(path, &key, &rows).map_err(|e| fail(&e))?;
+            crate::on_interrupt_say(Some(format!(
+                "note: the checkpoint `{}` is kept with the work done so far; run the same command again \
+                 to go on from it",
+                path.display()
+            )));
+            Some(opened)
         }
         None => None,
     };
@@ -348,13 +396,14 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
     }
     if let Some(checkpoint) = checkpoint {
+        crate::on_interrupt_say(None);
         let path = checkpoint.path().to_path_buf();
         if let Err(e) = checkpoint.remove() {
-            eprintln!("warning: the render is written, but its checkpoint `{}` stays: {e}", path.display());
+            errln!("warning: the render is written, but its checkpoint `{}` stays: {e}", path.display());
         }
     }
     if let Some(p) = stats.photons.filter(|p| p.emitted < p.requested) {
-        eprintln!(
+        errln!(
             "warning: the photon map was full (`max_photons= {}`) after {} of the {} photons; the estimate \
              still divides by all {} (as the course's renderer does), so the image is about {:.1} times \
              darker than a map that held them all\n  = note: raise `max_photons=` or lower `emit_photons=` \
@@ -416,13 +465,13 @@ fn passes_and_runs(
 fn warn_unused_options(args: &RenderArgs, model: Model) {
     let name = model.name();
     if args.photons.is_some() && !model.uses_photons() {
-        eprintln!("warning: --photons has no effect on the {name} model");
+        errln!("warning: --photons has no effect on the {name} model");
     }
     if args.max_depth != DEFAULT_MAX_DEPTH && !model.is_physically_based() {
-        eprintln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
+        errln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
     }
     if args.spp.is_some() && model == Model::Sppm {
-        eprintln!(
+        errln!(
             "warning: --spp has no effect on the sppm model (one camera path a pixel a pass; use --passes)"
         );
     }
@@ -451,7 +500,7 @@ fn print_summary(
     prepare: Duration,
     render: Duration,
 ) {
-    println!("wrote {}", output.display());
+    outln!("wrote {}", output.display());
     if settings.model.is_physically_based() {
         print_physical_summary(pixels, settings, stats, prepare, render);
         return;
@@ -463,7 +512,7 @@ fn print_summary(
     }
     let seconds = render.saturating_sub(photon_phase).as_secs_f64().max(1e-9);
     let rays_per_second = stats.rays as f64 / seconds;
-    println!(
+    outln!(
         "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} camera samples ({} pixels refined)",
         seconds,
         prepare.as_secs_f64(),
@@ -471,14 +520,14 @@ fn print_summary(
         stats.camera_samples,
         stats.refined_pixels,
     );
-    println!(
+    outln!(
         "{} rays, {:.1} M rays/s ({:.1} M rays/s per thread)",
         stats.rays,
         rays_per_second / 1e6,
         rays_per_second / 1e6 / stats.threads.max(1) as f64
     );
     if stats.photons.is_some() {
-        println!(
+        outln!(
             "{} photon-map lookups, {:.2} M lookups/s",
             stats.lookups,
             stats.lookups as f64 / seconds / 1e6
@@ -496,7 +545,7 @@ fn print_physical_summary(
 ) {
     let seconds = render.as_secs_f64().max(1e-9);
     let threads = stats.threads.max(1) as f64;
-    println!(
+    outln!(
         "{pixels} in {:.2} s (+{:.2} s to load), {} threads, {} model, paths of at most {} segments",
         seconds,
         prepare.as_secs_f64(),
@@ -506,7 +555,7 @@ fn print_physical_summary(
     );
     match stats.sppm {
         Some(SppmStats { passes, photons, stored, mean_radius, photon_seconds, .. }) => {
-            println!(
+            outln!(
                 "{passes} passes of {} photons ({photons} emitted, {stored} stored, {:.1} s tracing them), \
                  {:.2} passes/s, {:.2} M photons/s; mean final radius {mean_radius:.4}",
                 photons / passes.max(1),
@@ -523,7 +572,7 @@ fn print_physical_summary(
                 1 => String::new(),
                 n => format!(" in each of {n} passes"),
             };
-            println!(
+            outln!(
                 "{spp} samples a pixel{}{passes}, {} samples, {:.2} M samples/s ({:.2} M samples/s per thread)",
                 if default { " (default)" } else { "" },
                 stats.camera_samples,
@@ -532,7 +581,7 @@ fn print_physical_summary(
             );
         }
     }
-    println!(
+    outln!(
         "{} rays, {:.1} M rays/s ({:.1} M rays/s per thread)",
         stats.rays,
         stats.rays as f64 / seconds / 1e6,
@@ -547,7 +596,7 @@ fn print_photon_summary(p: &PhotonStats) {
     } else {
         format!("{} photons emitted", p.emitted)
     };
-    println!(
+    outln!(
         "{emitted} in {trace:.2} s ({:.1} M photons/s), {} stored ({}), search tree built in {:.2} s",
         p.emitted as f64 / trace.max(1e-9) / 1e6,
         p.stored,
@@ -572,7 +621,7 @@ fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
         };
         if *shown < MAX_KEPT_DIAGNOSTICS {
             *shown += 1;
-            eprintln!("{d}");
+            errln!("{d}");
         } else {
             *more += 1;
         }
@@ -585,7 +634,7 @@ fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
         parts.push(format!("{} more warning{} and notes", omitted.others, plural(omitted.others)));
     }
     if !parts.is_empty() {
-        eprintln!("... and {}\n", parts.join(" and "));
+        errln!("... and {}\n", parts.join(" and "));
     }
 }
 
@@ -593,8 +642,36 @@ fn plural(n: usize) -> &'static str {
     if n == 1 { "" } else { "s" }
 }
 
+/// Refuses `path` (given as `flag`) when it is the same file as `input`, a file the render reads.
+fn refuse_input_as(path: &Path, flag: &str, input: &Path) -> Result<(), ExitCode> {
+    if crate::same_file::same_file(path, input) {
+        return Err(usage(&format!(
+            "{flag} `{}` is `{}`, which the render reads; writing it would destroy an input: give another name",
+            path.display(),
+            input.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The name of an output format, for messages.
+pub fn format_name(format: OutputFormat) -> &'static str {
+    match format {
+        OutputFormat::Png => "PNG",
+        OutputFormat::Bmp => "BMP",
+        OutputFormat::Exr => "EXR",
+        OutputFormat::Hdr => "HDR",
+    }
+}
+
+/// Prints an error about the command line and returns the exit code of a usage error (2).
+pub fn usage(message: &str) -> ExitCode {
+    errln!("error: {message}");
+    ExitCode::from(2)
+}
+
 /// Prints an error and returns the failure exit code.
 fn fail(message: &str) -> ExitCode {
-    eprintln!("error: {message}");
+    errln!("error: {message}");
     ExitCode::FAILURE
 }

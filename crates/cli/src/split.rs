@@ -3,11 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
-use raytracer::RenderSettings;
 use raytracer::parts::{SceneDigest, Split};
 use raytracer::render::Rows;
 use raytracer::render::checkpoint::Checkpoint;
 use raytracer::scene::SourceFile;
+use raytracer::{RenderSettings, Sampling};
 
 /// Variables that hold a task's index, in the order they are looked for: a Slurm array task's,
 /// then a Kubernetes Indexed Job's.
@@ -58,19 +58,39 @@ pub fn resolve(spec: &str, flag: &str, env: impl Fn(&str) -> Option<String>) -> 
     })
 }
 
-/// Everything in `settings` that shapes the pixels, as one line (the worker threads do not).
+/// Checks the form of a `--tile` or `--pass` value without the environment: `K/N` (K below N),
+/// `auto` or `auto/N` (N at least 1).
+pub fn check_form(spec: &str) -> Result<(), String> {
+    match spec.strip_prefix("auto") {
+        None => Split::parse(spec).map(drop),
+        Some("") => Ok(()),
+        Some(rest) => rest
+            .strip_prefix('/')
+            .and_then(|n| n.parse::<u32>().ok())
+            .filter(|&n| n > 0)
+            .map(drop)
+            .ok_or_else(|| format!("expected K/N, auto or auto/N (N at least 1), not `{spec}`")),
+    }
+}
+
+/// Everything in `settings` that shapes the pixels, as one line of words (the worker threads do
+/// not): part files and checkpoints keep it, and `merge` shows it when parts disagree.
 pub fn settings_line(settings: &RenderSettings) -> String {
+    let sampling = match settings.sampling {
+        Sampling::Adaptive => "adaptive".to_string(),
+        Sampling::Uniform(n) => format!("{n} samples a pixel"),
+    };
+    let or_scene = |value: Option<u64>| value.map_or_else(|| "the scene's".to_string(), |n| n.to_string());
     format!(
-        "rayterra {}; model {}; size {}x{}; sampling {:?}; seed {}; max depth {}; photons {:?}; sppm passes {:?}; runs {}",
+        "rayterra {}; model {}; size {}x{}; sampling {sampling}; seed {}; max depth {}; photons {}; sppm passes {}; runs {}",
         env!("CARGO_PKG_VERSION"),
         settings.model.name(),
         settings.width,
         settings.height,
-        settings.sampling,
         settings.seed,
         settings.max_depth,
-        settings.photons,
-        settings.passes,
+        or_scene(settings.photons),
+        or_scene(settings.passes),
         settings.runs
     )
 }
@@ -81,8 +101,8 @@ pub fn scene_digest(source: &SourceFile, inputs: &[PathBuf]) -> Result<String, S
     let mut digest = SceneDigest::new();
     digest.add("scene", source.text().as_bytes());
     for (i, path) in inputs.iter().enumerate() {
-        let bytes =
-            std::fs::read(path).map_err(|e| format!("cannot read `{}` again: {e}", path.display()))?;
+        let bytes = atomic_file::read_regular(path)
+            .map_err(|e| format!("cannot read `{}` again: {e}", path.display()))?;
         digest.add(&format!("input {i}"), &bytes);
     }
     Ok(digest.finish())
@@ -95,9 +115,9 @@ pub fn open_checkpoint(path: &Path, key: &str, rows: &Rows) -> Result<Checkpoint
     match checkpoint.resumed() {
         (0, 0) => {}
         (chunks, 0) => {
-            eprintln!("note: resuming from `{}`: {chunks} chunks of rows were done", path.display())
+            errln!("note: resuming from `{}`: {chunks} chunks of rows were done", path.display())
         }
-        (_, passes) => eprintln!("note: resuming from `{}` after {passes} SPPM passes", path.display()),
+        (_, passes) => errln!("note: resuming from `{}` after {passes} SPPM passes", path.display()),
     }
     Ok(checkpoint)
 }
@@ -108,6 +128,40 @@ mod tests {
 
     fn env<'a>(vars: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<String> + 'a {
         move |name| vars.iter().find(|(k, _)| *k == name).map(|(_, v)| v.to_string())
+    }
+
+    #[test]
+    fn the_settings_line_has_no_debug_formatting() {
+        let mut settings = RenderSettings {
+            width: 4,
+            height: 3,
+            sampling: Sampling::Adaptive,
+            threads: None,
+            seed: 7,
+            model: raytracer::integrator::Model::Classic,
+            photons: None,
+            memory_limit: 1 << 30,
+            max_depth: 5,
+            passes: None,
+            runs: 1,
+        };
+        let line = settings_line(&settings);
+        assert!(line.contains("sampling adaptive") && line.contains("photons the scene's"), "{line}");
+        settings.sampling = Sampling::Uniform(16);
+        settings.photons = Some(1000);
+        let line = settings_line(&settings);
+        assert!(line.contains("sampling 16 samples a pixel") && line.contains("photons 1000"), "{line}");
+        assert!(!line.contains("Some") && !line.contains("None") && !line.contains("Uniform"), "{line}");
+    }
+
+    #[test]
+    fn malformed_splits_are_found_without_the_environment() {
+        for good in ["0/1", "2/8", "auto", "auto/4"] {
+            assert_eq!(check_form(good), Ok(()), "{good}");
+        }
+        for bad in ["3/2", "1", "a/b", "auto/0", "auto/", "autox", "2/0"] {
+            assert!(check_form(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

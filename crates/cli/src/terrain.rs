@@ -171,7 +171,7 @@ fn parse_time(text: &str) -> Result<f64, String> {
 pub fn run(args: TerrainArgs) -> Result<(), ExitCode> {
     terrain::heap::keep_freed_memory();
     execute(args).map_err(|message| {
-        eprintln!("error: {message}");
+        errln!("error: {message}");
         ExitCode::FAILURE
     })
 }
@@ -191,11 +191,11 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
     let world = load_world(&args, &config)?;
     if let Some(dir) = &args.export_assets {
         let written = terrain_world::export::save_course_folder(&world, dir).map_err(|e| e.to_string())?;
-        println!("wrote {} files to {}", written.len(), dir.display());
+        outln!("wrote {} files to {}", written.len(), dir.display());
         return Ok(());
     }
     let heightmap_bytes = world.heightmap.levels().len() * world.heightmap.bytes_per_sample();
-    eprintln!(
+    errln!(
         "memory (CPU): world {} (heightmap {}, {} bytes a sample; images {})",
         megabytes(world.memory_bytes() as u64),
         megabytes(heightmap_bytes as u64),
@@ -249,9 +249,14 @@ fn keep_camera_inside(pose: CameraPose, world: &World, config: &SceneConfig, sou
     } else {
         format!("under the water or closer to it than {} units", limits.clearance)
     };
-    eprintln!(
+    errln!(
         "warning: {source} puts the camera at {},{},{}, {reason}; moved to {},{},{} as the window would",
-        wanted.x, wanted.y, wanted.z, allowed.x, allowed.y, allowed.z
+        wanted.x,
+        wanted.y,
+        wanted.z,
+        allowed.x,
+        allowed.y,
+        allowed.z
     );
     CameraPose { position: allowed, ..pose }
 }
@@ -262,7 +267,7 @@ fn load_settings(args: &TerrainArgs) -> Result<Settings, String> {
     let mut settings = match &args.settings {
         None => Settings::default(),
         Some(path) if !path.exists() && args.screenshot.is_none() => {
-            eprintln!(
+            errln!(
                 "settings: {} does not exist yet; starting from the defaults (the panel's Save, F1, writes it)",
                 path.display()
             );
@@ -287,7 +292,7 @@ fn report_gpu_memory(memory: &GpuMemory, tree_bytes: usize, world: &World) {
     let per_sample = memory.bytes_per_sample(samples)
         + world.heightmap.bytes_per_sample() as f64
         + tree_bytes as f64 / samples as f64;
-    eprintln!(
+    errln!(
         "memory (GPU): {} (height texture {}, static mesh {}, light map {}, textures {}, depth {}); LOD tree {} on the CPU",
         megabytes(memory.total()),
         megabytes(memory.heights),
@@ -297,7 +302,7 @@ fn report_gpu_memory(memory: &GpuMemory, tree_bytes: usize, world: &World) {
         megabytes(memory.depth),
         megabytes(tree_bytes as u64),
     );
-    eprintln!("memory: a height sample costs {per_sample:.2} bytes in all (CPU and GPU)");
+    errln!("memory: a height sample costs {per_sample:.2} bytes in all (CPU and GPU)");
 }
 
 /// Why the display could not be opened, for people: winit's message without the location in
@@ -349,7 +354,7 @@ fn load_world(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String>
         let world = terrain_world::assets::load_course_folder(dir);
         spinner.finish_and_clear();
         let world = world.map_err(|error| error.to_string())?;
-        eprintln!(
+        errln!(
             "world: course assets from {}, {}x{} heightmap ({})",
             dir.display(),
             world.heightmap.columns(),
@@ -386,7 +391,7 @@ fn load_world(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String>
         Some(path) => format!("heightmap {}", path.display()),
         None => "procedural island".to_string(),
     };
-    eprintln!(
+    errln!(
         "world: {source}, seed {}, {}x{} heightmap ({})",
         args.seed,
         world.heightmap.columns(),
@@ -409,7 +414,7 @@ fn seconds(duration: Duration) -> String {
 
 fn open_gpu(backend: Backend) -> Result<Gpu, String> {
     let gpu = Gpu::headless(backend).map_err(|error| error.to_string())?;
-    eprintln!("adapter: {}", gpu.describe());
+    errln!("adapter: {}", gpu.describe());
     Ok(gpu)
 }
 
@@ -429,8 +434,8 @@ fn screenshot(
     report_gpu_memory(&headless.renderer().gpu_memory(), headless.renderer().cpu_bytes(), world);
     let image = headless.render(&gpu, view).map_err(|error| error.to_string())?;
     terrain::output::save_frame(image, out).map_err(|error| error.to_string())?;
-    eprintln!("rendered in {} ({} look)", seconds(started.elapsed()), settings.look.name());
-    println!("wrote {} ({}x{})", out.display(), args.size.0, args.size.1);
+    errln!("rendered in {} ({} look)", seconds(started.elapsed()), settings.look.name());
+    outln!("wrote {} ({}x{})", out.display(), args.size.0, args.size.1);
     Ok(())
 }
 
@@ -453,19 +458,19 @@ fn open_window(
         settings,
         settings_path: args.settings.clone().unwrap_or_else(|| PathBuf::from(DEFAULT_SETTINGS_FILE)),
     };
-    eprint!("controls:\n{}", controls::help());
+    err!("controls:\n{}", controls::help());
     let mut notice = |notice: Notice| match notice {
-        Notice::Adapter(adapter) => eprintln!("adapter: {adapter}"),
+        Notice::Adapter(adapter) => errln!("adapter: {adapter}"),
         Notice::GpuMemory { memory, tree_bytes } => report_gpu_memory(&memory, tree_bytes, world),
-        Notice::SettingsSaved(path) => println!("saved settings {}", path.display()),
-        Notice::SettingsFailed(reason) => eprintln!("settings not saved: {reason}"),
-        Notice::ScreenshotSaved(path) => println!("saved screenshot {}", path.display()),
-        Notice::ScreenshotFailed(reason) => eprintln!("screenshot failed: {reason}"),
+        Notice::SettingsSaved(path) => outln!("saved settings {}", path.display()),
+        Notice::SettingsFailed(reason) => errln!("settings not saved: {reason}"),
+        Notice::ScreenshotSaved(path) => outln!("saved screenshot {}", path.display()),
+        Notice::ScreenshotFailed(reason) => errln!("screenshot failed: {reason}"),
         Notice::MouseCaptured(true) => {
-            eprintln!("mouse captured for looking around (Tab releases it)")
+            errln!("mouse captured for looking around (Tab releases it)")
         }
         Notice::MouseCaptured(false) => {
-            eprintln!("mouse released (click in the window or press Tab to look around)")
+            errln!("mouse released (click in the window or press Tab to look around)")
         }
     };
     let summary = window::run(world, config, options, &mut notice).map_err(|error| match error {
@@ -473,7 +478,7 @@ fn open_window(
         other => other.to_string(),
     })?;
     if summary.frames > 0 {
-        eprintln!(
+        errln!(
             "{} frames in {}: {:.1} ms a frame on average",
             summary.frames,
             seconds(Duration::from_secs_f64(summary.seconds)),

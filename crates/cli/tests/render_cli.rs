@@ -180,7 +180,7 @@ fn bad_requests_are_refused_without_output() {
     std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
     let cases: [(&[&str], i32, &str); 8] = [
         (&["render", "scene.txt", "--size", "100000x100000"], 2, "out of range"),
-        (&["render", "scene.txt", "--size", "30000x30000"], 1, "too large"),
+        (&["render", "scene.txt", "--size", "30000x30000"], 2, "too large"),
         (&["render", "scene.txt", "--size", "12"], 2, "expected WIDTHxHEIGHT"),
         (&["render", "scene.txt", "-o", "out.gif"], 1, "use .png, .bmp, .exr or .hdr"),
         (&["render", "scene.txt", "--spp", "0"], 2, "--spp"),
@@ -478,4 +478,257 @@ fn sigterm_during_a_render_exits_130_without_output() {
     assert_eq!(out.status.code(), Some(130), "{}", text(&out.stderr));
     assert!(text(&out.stderr).contains("rayterra: interrupted"), "{}", text(&out.stderr));
     assert_eq!(file_names(dir.path()), ["scene.txt"]);
+}
+
+/// Issue 31, defect 1: the checkpoint is removed once the image is written, so a checkpoint that
+/// is the output (under any name) or an input of the render would destroy it.
+#[test]
+fn a_checkpoint_or_output_that_is_another_file_of_the_render_is_refused() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE.replace("builtin:marble", "stone.bmp"))
+        .expect("write scene");
+    image::RgbImage::from_pixel(4, 4, image::Rgb([200, 100, 50]))
+        .save(dir.path().join("stone.bmp"))
+        .expect("bmp");
+    let stone = std::fs::read(dir.path().join("stone.bmp")).expect("read");
+    let scene = std::fs::read(dir.path().join("scene.txt")).expect("read");
+    let abs = dir.path().join("a.png");
+    let abs = abs.to_str().expect("utf-8 path");
+    let cases: [(&[&str], &str); 6] = [
+        (&["-o", "a.png", "--checkpoint", "a.png"], "are the same file"),
+        (&["-o", "a.png", "--checkpoint", "./a.png"], "are the same file"),
+        (&["-o", abs, "--checkpoint", "a.png"], "are the same file"),
+        (&["-o", "a.png", "--checkpoint", "scene.txt"], "which the render reads"),
+        (&["-o", "a.png", "--checkpoint", "./stone.bmp"], "which the render reads"),
+        (&["-o", "stone.bmp", "--checkpoint", "c.ckpt"], "which the render reads"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", "scene.txt", "-q", "--size", "8x6"];
+        args.extend_from_slice(extra);
+        let out = rayterra(&args, dir.path());
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert!(!dir.path().join("a.png").exists() && !dir.path().join("c.ckpt").exists(), "{extra:?}");
+        assert_eq!(std::fs::read(dir.path().join("stone.bmp")).expect("read"), stone, "{extra:?}");
+        assert_eq!(std::fs::read(dir.path().join("scene.txt")).expect("read"), scene, "{extra:?}");
+    }
+    // An existing image named twice is the same file too, and is kept.
+    let out = rayterra(&["render", "scene.txt", "-q", "--size", "8x6", "-o", "a.png"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let out = rayterra(
+        &["render", "scene.txt", "-q", "--size", "8x6", "-o", "a.png", "--checkpoint", abs],
+        dir.path(),
+    );
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+    assert!(dir.path().join("a.png").exists(), "the earlier image is kept");
+    // Distinct files are fine, and the checkpoint is gone afterwards.
+    let out = rayterra(
+        &["render", "scene.txt", "-q", "--size", "8x6", "-o", "b.png", "--checkpoint", "b.ckpt"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(dir.path().join("b.png").exists() && !dir.path().join("b.ckpt").exists());
+}
+
+/// `rayterra ARGS` in `dir`, killed after `seconds` (`None`: it hung).
+#[cfg(unix)]
+fn rayterra_within(args: &[&str], dir: &Path, seconds: u64) -> Option<Output> {
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run rayterra");
+    let started = Instant::now();
+    while started.elapsed() < Duration::from_secs(seconds) {
+        if child.try_wait().expect("wait").is_some() {
+            return Some(child.wait_with_output().expect("output"));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+/// Issue 31, defect 2: named pipes (an OBJ's `mtllib`, `--checkpoint`, a part to merge, the scene
+/// itself) are refused at once instead of waiting forever for a writer.
+#[cfg(unix)]
+#[test]
+fn named_pipes_are_refused_without_waiting() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    for name in ["pipe.mtl", "pipe.ckpt", "pipe.exr", "pipe.txt"] {
+        let made = Command::new("mkfifo").arg(dir.path().join(name)).status().expect("mkfifo runs");
+        assert!(made.success());
+    }
+    std::fs::write(dir.path().join("m.obj"), "mtllib pipe.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+        .expect("write obj");
+    std::fs::write(
+        dir.path().join("mesh.txt"),
+        format!("{SMALL_SCENE}primitive mesh\n file= m.obj\n diff= 1\nend\n"),
+    )
+    .expect("write scene");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    let cases: [(&[&str], &str); 4] = [
+        (&["render", "mesh.txt", "--check"], "pipe.mtl"),
+        (&["render", "scene.txt", "--size", "8x6", "-o", "a.png", "--checkpoint", "pipe.ckpt"], "pipe.ckpt"),
+        (&["merge", "pipe.exr", "-o", "a.png"], "pipe.exr"),
+        (&["render", "pipe.txt", "-o", "a.png"], "pipe.txt"),
+    ];
+    for (args, needle) in cases {
+        let out = rayterra_within(args, dir.path(), 60).unwrap_or_else(|| panic!("{args:?} hung on a pipe"));
+        let stderr = text(&out.stderr);
+        assert!(stderr.contains(needle) && stderr.contains("not a regular file"), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    assert!(!dir.path().join("a.png").exists());
+}
+
+/// Runs `rayterra ARGS` in `dir` with its standard output (and, if `close_stderr`, its standard
+/// error) a pipe whose reading end is closed before it writes: what `rayterra ... | head -0`
+/// gives it.
+#[cfg(unix)]
+pub fn rayterra_into_closed_pipes(args: &[&str], dir: &Path, close_stderr: bool) -> Output {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run rayterra");
+    drop(child.stdout.take());
+    if close_stderr {
+        drop(child.stderr.take());
+    }
+    child.wait_with_output().expect("wait")
+}
+
+/// Issue 31, defect 3: a closed standard output (or error) is not an error of the work: the
+/// image is written, nothing panics, and the exit status is the work's.
+#[cfg(unix)]
+#[test]
+fn closed_output_streams_neither_panic_nor_lose_the_image() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    for close_stderr in [false, true] {
+        let _ = std::fs::remove_file(dir.path().join("a.png"));
+        let out = rayterra_into_closed_pipes(
+            &["render", "scene.txt", "--size", "8x6", "-o", "a.png"],
+            dir.path(),
+            close_stderr,
+        );
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "stderr closed: {close_stderr}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert!(image::open(dir.path().join("a.png")).is_ok(), "the image is written");
+    }
+    // An error is still an error.
+    let out = rayterra_into_closed_pipes(&["render", "missing.txt", "-o", "b.png"], dir.path(), true);
+    assert_eq!(out.status.code(), Some(1));
+}
+
+/// Issue 31, defect 6: an output path ending with a slash names a folder: refused before any
+/// work, by render (whole or a part) and merge.
+#[test]
+fn an_output_path_ending_with_a_slash_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    let out =
+        rayterra(&["render", "scene.txt", "-q", "--size", "8x6", "--tile", "0/1", "-o", "p.exr"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    for args in [
+        &["render", "scene.txt", "--size", "8x6", "-o", "out.png/"][..],
+        &["render", "scene.txt", "--size", "8x6", "-o", "out.png/."][..],
+        &["render", "scene.txt", "--size", "8x6", "--tile", "0/2", "-o", "part.exr/"][..],
+        &["merge", "p.exr", "-o", "out.png/"][..],
+    ] {
+        let out = rayterra(args, dir.path());
+        let stderr = text(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains("names a folder"), "{args:?}: {stderr}");
+    }
+    let mut left: Vec<_> =
+        std::fs::read_dir(dir.path()).expect("list").map(|e| e.expect("entry").file_name()).collect();
+    left.sort();
+    assert_eq!(left, ["p.exr", "scene.txt"], "nothing written");
+}
+
+/// Issue 31, defect 11: malformed options exit with status 2; messages have no debug formatting;
+/// the aspect warning names the size rendered.
+#[test]
+fn small_ones_exit_codes_plain_messages_and_the_size_rendered() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SMALL_SCENE).expect("write scene");
+    for args in [
+        &["render", "scene.txt", "--size", "8200x8200"][..],
+        &["render", "scene.txt", "--tile", "3/2", "-o", "t.exr"][..],
+        &["render", "scene.txt", "--pass", "auto/0", "-o", "t.exr"][..],
+    ] {
+        let out = rayterra(args, dir.path());
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", text(&out.stderr));
+    }
+    let out = rayterra(&["render", "scene.txt", "-q", "--size", "8x6", "--gamma", "-o", "a.exr"], dir.path());
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("no effect on linear EXR output"), "{stderr}");
+    // A square lens on a 40x30 image: the file's size is not the one rendered.
+    let square = SMALL_SCENE.replace(" lens_W= 0.8\n lens_H= 0.6\n", " lens_W= 1\n lens_H= 1\n");
+    std::fs::write(dir.path().join("square.txt"), square).expect("write scene");
+    let out = rayterra(&["render", "square.txt", "-q", "--size", "20x20", "-o", "s.png"], dir.path());
+    let stderr = text(&out.stderr);
+    assert!(out.status.success() && !stderr.contains("aspect"), "{stderr}");
+    let out = rayterra(&["render", "square.txt", "-q", "--size", "80x60", "-o", "s.png"], dir.path());
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("image aspect 80/60") && !stderr.contains("40/30"), "{stderr}");
+    assert_eq!(stderr.matches("aspect").count(), 2, "one warning: {stderr}");
+    // A PNG texture with a broken checksum: the decoder's message names the chunk plainly.
+    let mut png = Vec::new();
+    image::RgbImage::from_pixel(4, 4, image::Rgb([9, 9, 9]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("png");
+    png[30] ^= 0xff; // In IHDR's CRC.
+    std::fs::write(dir.path().join("bad.png"), &png).expect("write");
+    std::fs::write(dir.path().join("bad.txt"), SMALL_SCENE.replace("builtin:marble", "bad.png"))
+        .expect("write");
+    let out = rayterra(&["render", "bad.txt", "--check"], dir.path());
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("IHDR") && !stderr.contains("ChunkType") && !stderr.contains("critical:"),
+        "{stderr}"
+    );
+}
+
+/// Issue 31, defect 11: after Ctrl-C, a render with `--checkpoint` says the checkpoint is kept and
+/// how to go on.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_render_says_its_checkpoint_is_kept() {
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("scene.txt"), SLOW_SCENE).expect("write scene");
+    let child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(["render", "scene.txt", "-q", "--size", "2048x2048", "-o", "out.png", "--checkpoint", "c.ckpt"])
+        .current_dir(dir.path())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run rayterra");
+    let started = Instant::now();
+    while !dir.path().join("c.ckpt").exists() && started.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    send_signal(&child, "-INT");
+    let out = child.wait_with_output().expect("wait");
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("the checkpoint `c.ckpt` is kept") && stderr.contains("run the same command again"),
+        "{stderr}"
+    );
+    assert!(dir.path().join("c.ckpt").exists());
+    assert!(!dir.path().join("out.png").exists());
 }

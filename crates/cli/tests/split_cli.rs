@@ -84,7 +84,10 @@ fn options_that_do_not_fit_together_are_refused() {
         assert!(stderr(&out).contains(expected), "{args:?}: {}", stderr(&out));
     };
     refused(&["--tile", "1/4", "-o", "part.png"], "name the output `.exr`");
-    refused(&["--tile", "4/4", "-o", "part.exr"], "numbered from 0 to 3");
+    // A malformed K/N is a usage error (exit status 2), as the README says of malformed options.
+    let out = rayterra(&["render", &cornell, "-q", "--tile", "4/4", "-o", "part.exr"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("numbered from 0 to 3"), "{}", stderr(&out));
     refused(&["--tile", "auto", "-o", "part.exr"], "SLURM_ARRAY_TASK_COUNT is not set");
     refused(&["--pass", "auto/4", "-o", "part.exr"], "JOB_COMPLETION_INDEX");
     refused(&["--pass", "0/4", "--passes", "3", "-o", "part.exr"], "--passes says 3");

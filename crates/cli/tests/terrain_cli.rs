@@ -322,3 +322,142 @@ fn running_out_of_memory_is_a_clear_error() {
     assert_fails(&output, 1, "memory");
     assert!(!out.exists(), "an image was written");
 }
+
+/// `rayterra terrain ARGS` as [`rayterra`] runs it, killed after `seconds` (`None`: it hung).
+fn rayterra_within(args: &[&str], seconds: u64) -> Option<Output> {
+    use std::process::Stdio;
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .arg("terrain")
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .env_remove("XDG_RUNTIME_DIR")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("rayterra runs");
+    let started = Instant::now();
+    while started.elapsed() < Duration::from_secs(seconds) {
+        if child.try_wait().expect("wait").is_some() {
+            return Some(child.wait_with_output().expect("output"));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+/// A named pipe that nothing writes to, at `path`.
+#[cfg(unix)]
+fn fifo(path: &Path) {
+    let _ = std::fs::remove_file(path);
+    let made = Command::new("mkfifo").arg(path).status().expect("mkfifo runs");
+    assert!(made.success(), "mkfifo {}", path.display());
+}
+
+/// Issue 31, defect 2: a named pipe given as a heightmap, a settings file or in an asset folder
+/// is refused at once instead of waiting forever for a writer.
+#[cfg(unix)]
+#[test]
+fn named_pipes_are_refused_without_waiting() {
+    let out = scratch("never-fifo.png");
+    let _ = std::fs::remove_file(&out);
+    let out_arg = out.to_str().expect("utf-8 path");
+    let pipe = scratch("pipe.png");
+    fifo(&pipe);
+    let pipe_arg = pipe.to_str().expect("utf-8 path");
+    let assets = scratch("fifo-assets");
+    let _ = std::fs::remove_dir_all(&assets);
+    std::fs::create_dir_all(&assets).expect("folder");
+    // Every file of a course folder is there, and one is a pipe.
+    for name in ["heightmap.bmp", "terrain-texture3.bmp", "detail.bmp"]
+        .into_iter()
+        .map(String::from)
+        .chain((0..6).map(|i| format!("SkyBox{i}.bmp")))
+    {
+        if name == "detail.bmp" {
+            fifo(&assets.join(&name));
+        } else {
+            image::RgbImage::from_pixel(4, 4, image::Rgb([120; 3])).save(assets.join(&name)).expect("bmp");
+        }
+    }
+    let assets_arg = assets.to_str().expect("utf-8 path");
+    for args in [
+        &["--heightmap", pipe_arg, "--screenshot", out_arg][..],
+        &["--settings", pipe_arg, "--screenshot", out_arg, "--grid", "8"][..],
+        &["--assets", assets_arg, "--screenshot", out_arg][..],
+    ] {
+        let output = rayterra_within(args, 60).unwrap_or_else(|| panic!("{args:?} hung on a named pipe"));
+        assert_fails(&output, 1, "not a regular file");
+    }
+    assert!(!out.exists());
+}
+
+/// Issue 31, defect 6: a screenshot path ending with a slash is refused before any work.
+#[test]
+fn a_screenshot_path_ending_with_a_slash_is_refused_before_any_work() {
+    let out = scratch("slash.png");
+    let _ = std::fs::remove_file(&out);
+    let arg = format!("{}/", out.display());
+    // The largest grid: generating it would take many seconds before the write failed.
+    let output = rayterra_within(&["--screenshot", &arg, "--grid", "8193"], 60).expect("it stops at once");
+    assert_fails(&output, 1, "names a folder");
+    assert!(!stderr(&output).contains("world:"), "the world was made: {}", stderr(&output));
+    assert!(!out.exists());
+}
+
+/// Issue 31, defect 3: `rayterra terrain --screenshot x.png 2>&1 | head -1` closes both streams
+/// after a line: the screenshot is still written, nothing panics, the exit status is 0.
+#[cfg(unix)]
+#[test]
+fn closed_output_streams_neither_panic_nor_lose_the_screenshot() {
+    use std::process::Stdio;
+    let out = scratch("closed-pipe.png");
+    let _ = std::fs::remove_file(&out);
+    let args =
+        ["terrain", "--screenshot", out.to_str().expect("utf-8 path"), "--size", "32x18", "--grid", "16"];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("XDG_RUNTIME_DIR")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("rayterra runs");
+    drop(child.stdout.take());
+    drop(child.stderr.take());
+    let status = child.wait().expect("wait");
+    if !status.success() {
+        // Why, with the streams open: no GPU is a skip, anything else a failure.
+        let output = rayterra(&args[1..]);
+        if no_gpu(&output) {
+            return;
+        }
+        panic!("with closed streams it exited with {status}; with open ones: {}", stderr(&output));
+    }
+    assert!(out.exists(), "the screenshot is written");
+}
+
+/// Issue 31, defect 7: an out-of-range value in a settings file names its line (before any GPU
+/// work).
+#[test]
+fn out_of_range_settings_name_their_line() {
+    let out = scratch("never-range.png");
+    let _ = std::fs::remove_file(&out);
+    let bad = scratch("range.toml");
+    std::fs::write(&bad, "look = \"modern\"\n[sun]\nintensity = 1\nelevation_degrees = 95\n").expect("write");
+    let output = rayterra(&[
+        "--settings",
+        bad.to_str().expect("utf-8 path"),
+        "--screenshot",
+        out.to_str().expect("utf-8 path"),
+        "--grid",
+        "8",
+    ]);
+    assert_fails(&output, 1, "range.toml:4: `sun.elevation_degrees` is 95");
+    assert!(!out.exists());
+}

@@ -162,14 +162,17 @@ fn open_decoder<'a, R: BufRead + Seek + 'a>(
 fn open_file(path: &Path) -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, TextureError> {
     let unreadable =
         |e| TextureError::Unreadable { path: path.to_path_buf(), source: image::ImageError::IoError(e) };
-    let metadata = std::fs::metadata(path).map_err(unreadable)?;
-    if metadata.is_dir() {
-        return Err(TextureError::Directory { path: path.to_path_buf() });
+    let file = atomic_file::open_regular(path).map_err(|e| match atomic_file::not_regular(&e) {
+        Some(atomic_file::NotRegular::Directory) => TextureError::Directory { path: path.to_path_buf() },
+        Some(atomic_file::NotRegular::Special) => TextureError::NotAFile { path: path.to_path_buf() },
+        None => unreadable(e),
+    })?;
+    // As `ImageReader::open` does: the format from the extension.
+    let mut reader = image::ImageReader::new(std::io::BufReader::new(file));
+    if let Ok(format) = image::ImageFormat::from_path(path) {
+        reader.set_format(format);
     }
-    if !metadata.is_file() {
-        return Err(TextureError::NotAFile { path: path.to_path_buf() });
-    }
-    image::ImageReader::open(path).map_err(unreadable)
+    Ok(reader)
 }
 
 fn display_paths(paths: &[std::path::PathBuf]) -> String {

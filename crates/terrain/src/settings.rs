@@ -219,9 +219,10 @@ impl Default for TerrainSettings {
     }
 }
 
-/// A camera and a time, saved so that a screenshot can be taken again exactly.
+/// A camera and a time, saved so that a screenshot can be taken again exactly. Every key is
+/// optional: a missing one takes the course's start (see [`Default`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct ViewSettings {
     /// The camera's position x, y, z in world units.
     pub position: [f32; 3],
@@ -233,6 +234,21 @@ pub struct ViewSettings {
     pub field_of_view_degrees: f32,
     /// Scene time in seconds.
     pub time_seconds: f64,
+}
+
+impl Default for ViewSettings {
+    /// The course's start ([`crate::SceneConfig`]'s `camera_start`), a field of view of 45
+    /// degrees and time 0: what `--screenshot` draws without a view.
+    fn default() -> Self {
+        let start = crate::SceneConfig::default().camera_start;
+        Self {
+            position: start.position.to_array(),
+            yaw_degrees: start.yaw_degrees,
+            pitch_degrees: start.pitch_degrees,
+            field_of_view_degrees: 45.0,
+            time_seconds: 0.0,
+        }
+    }
 }
 
 impl ViewSettings {
@@ -283,10 +299,16 @@ pub enum SettingsError {
         message: String,
     },
     /// A value is out of its range.
-    #[error("{}: `{key}` is {value}, it must be between {min} and {max}", path.display())]
+    #[error(
+        "{}{}: `{key}` is {value}, it must be between {min} and {max}",
+        path.display(),
+        line.map_or_else(String::new, |line| format!(":{line}"))
+    )]
     Range {
         /// The file.
         path: PathBuf,
+        /// The 1-based line of the value in the file, when it can be found.
+        line: Option<usize>,
         /// The key, e.g. `fog.density`.
         key: &'static str,
         /// The value found.
@@ -351,7 +373,8 @@ impl Settings {
         })?;
         for (key, value, min, max) in settings.ranges() {
             if !(min..=max).contains(&value) {
-                return Err(SettingsError::Range { path: path.to_path_buf(), key, value, min, max });
+                let line = line_of_key(text, key);
+                return Err(SettingsError::Range { path: path.to_path_buf(), line, key, value, min, max });
             }
         }
         Ok(settings)
@@ -366,17 +389,18 @@ impl Settings {
     /// Reads settings from a TOML file (a regular file of at most [`MAX_SETTINGS_BYTES`]).
     pub fn load(path: &Path) -> Result<Self, SettingsError> {
         let read_error = |source| SettingsError::Read { path: path.to_path_buf(), source };
-        let metadata = std::fs::metadata(path).map_err(read_error)?;
-        if !metadata.is_file() {
-            return Err(read_error(std::io::Error::other("not a regular file")));
-        }
+        // Never waits on a named pipe; a folder or device is refused.
+        let file = atomic_file::open_regular(path).map_err(read_error)?;
+        let metadata = file.metadata().map_err(read_error)?;
         if metadata.len() > MAX_SETTINGS_BYTES {
             return Err(read_error(std::io::Error::other(format!(
                 "{} bytes is too large for a settings file (at most {MAX_SETTINGS_BYTES})",
                 metadata.len()
             ))));
         }
-        let text = std::fs::read_to_string(path).map_err(read_error)?;
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut std::io::Read::take(file, MAX_SETTINGS_BYTES + 1), &mut text)
+            .map_err(read_error)?;
         Self::from_toml(&text, path)
     }
 
@@ -386,6 +410,35 @@ impl Settings {
             format!("# rayterra terrain settings (rayterra terrain --settings FILE)\n{}", self.to_toml());
         write_file(path, text.as_bytes())
     }
+}
+
+/// The 1-based line of the value of `key` (`fog.density`, `sun.colour[2]`) in the TOML `text`,
+/// wherever the file puts it (a table, a dotted key, an inline table).
+fn line_of_key(text: &str, key: &str) -> Option<usize> {
+    use toml::de::{DeTable, DeValue};
+    let (names, index) = match key.split_once('[') {
+        Some((names, rest)) => (names, rest.trim_end_matches(']').parse::<usize>().ok()),
+        None => (key, None),
+    };
+    let root = DeTable::parse(text).ok()?;
+    let mut table = root.get_ref();
+    let mut found = None;
+    let mut parts = names.split('.').peekable();
+    while let Some(part) = parts.next() {
+        let value = table.iter().find(|(k, _)| k.get_ref().as_ref() == part).map(|(_, v)| v)?;
+        if parts.peek().is_none() {
+            found = Some(value);
+        } else if let DeValue::Table(inner) = value.get_ref() {
+            table = inner;
+        } else {
+            return None;
+        }
+    }
+    let mut span = found?.span();
+    if let (Some(i), Some(DeValue::Array(items))) = (index, found.map(|v| v.get_ref())) {
+        span = items.get(i)?.span();
+    }
+    Some(text.get(..span.start)?.matches('\n').count() + 1)
 }
 
 #[cfg(test)]
@@ -409,6 +462,20 @@ mod tests {
         assert_eq!(Settings::from_toml(&text, Path::new("a.toml")).expect("valid"), settings);
     }
 
+    /// Issue 31, defect 7: every key is optional, within `[view]` too.
+    #[test]
+    fn a_view_lists_only_what_it_changes() {
+        let settings =
+            Settings::from_toml("[view]\ntime_seconds = 3.0\n", Path::new("v.toml")).expect("valid");
+        let view = settings.view.expect("a view");
+        assert_eq!(view.time_seconds, 3.0);
+        assert_eq!(ViewSettings { time_seconds: 0.0, ..view.clone() }, ViewSettings::default());
+        assert_eq!(view.position, [0.0, 2.5, 10.0]);
+        assert_eq!(view.field_of_view_degrees, 45.0);
+        let settings = Settings::from_toml("[view]\n", Path::new("v.toml")).expect("valid");
+        assert_eq!(settings.view, Some(ViewSettings::default()));
+    }
+
     #[test]
     fn a_file_lists_only_what_it_changes() {
         let text = "look = \"modern\"\n[fog]\ndensity = 0.1\n";
@@ -426,6 +493,17 @@ mod tests {
         assert!(text.contains("my.toml") && text.contains("densty") && text.contains("line 2"), "{text}");
         let error = Settings::from_toml("[fog]\ndensity = 7\n", Path::new("my.toml")).expect_err("range");
         assert!(error.to_string().contains("`fog.density` is 7"), "{error}");
+        // Issue 31, defect 7: out-of-range values name their line, wherever they are written.
+        assert!(error.to_string().starts_with("my.toml:2: "), "{error}");
+        for (text, line) in [
+            ("look = \"modern\"\n\n[sun]\nintensity = 1\nelevation_degrees = 95\n", 5),
+            ("sun.elevation_degrees = -40\n", 1),
+            ("[water]\ncolour = [\n  0.1,\n  0.2,\n  1.5,\n]\n", 5),
+            ("[view]\nfield_of_view_degrees = 120\n", 2),
+        ] {
+            let error = Settings::from_toml(text, Path::new("r.toml")).expect_err("range").to_string();
+            assert!(error.starts_with(&format!("r.toml:{line}: ")), "{text}: {error}");
+        }
         let error = Settings::from_toml("look = \"fancy\"\n", Path::new("my.toml")).expect_err("bad look");
         assert!(error.to_string().contains("fancy"), "{error}");
         let error = Settings::from_toml("[water]\ncolour = [0.1, 0.2, 1.5]\n", Path::new("w.toml"))
@@ -436,7 +514,7 @@ mod tests {
     #[test]
     fn folders_devices_and_huge_files_are_refused_before_reading() {
         let error = Settings::load(&std::env::temp_dir()).expect_err("a folder").to_string();
-        assert!(error.contains("not a regular file"), "{error}");
+        assert!(error.contains("it is a directory"), "{error}");
         if Path::new("/dev/zero").exists() {
             let error = Settings::load(Path::new("/dev/zero")).expect_err("a device").to_string();
             assert!(error.contains("/dev/zero") && error.contains("not a regular file"), "{error}");

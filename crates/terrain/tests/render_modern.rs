@@ -208,3 +208,50 @@ fn the_course_look_is_unchanged_bit_for_bit() {
         );
     }
 }
+
+/// Issue 31, defect 10: where the water meets the sky box's walls (y = 0 at the walls) no pixel is
+/// black. The water's edge and the walls' bottom edges lie on the same line; where the two meet
+/// in a T (the water's edge has many vertices, a wall's one) the rasteriser can leave a pixel
+/// that neither covers, which showed the black the frame is cleared to.
+#[test]
+fn no_pixel_is_black_where_the_water_meets_the_sky() {
+    let Some(gpu) = gpu(Backend::Vulkan) else { return };
+    let island = common::default_island();
+    let config = terrain::SceneConfig::default();
+    let (hx, hz) = (config.sky_box_size.x / 2.0, config.sky_box_size.z / 2.0);
+    let mut sunset = Settings::default();
+    sunset.sun.elevation_degrees = 6.0;
+    sunset.sun.azimuth_degrees = 290.0;
+    sunset.sun.colour = [1.0, 0.65, 0.35];
+    let views = [
+        // The README's sunset (docs/terrain-sunset.toml), where a black pixel was seen.
+        (view_from([-9.5, 0.7, 6.0], 20.0, -4.0), (1280, 720), &sunset),
+        (view_from([0.0, 2.5, 10.0], 0.0, 0.0), (640, 360), &sunset),
+        (view_from([3.0, 0.4, -4.0], 135.0, 2.0), (640, 360), &Settings::default()),
+        (view_from([-6.0, 5.0, 2.0], 250.0, -10.0), (480, 320), &Settings::default()),
+    ];
+    for (view, size, settings) in views {
+        let image = render_with(gpu, island, settings, size, &view);
+        // The walls' bottom edges, finely sampled, and the pixels around each.
+        let mut checked = 0;
+        for k in 0..=4000 {
+            let t = k as f32 / 4000.0;
+            let (x, z) = (-hx + 2.0 * hx * t, -hz + 2.0 * hz * t);
+            for point in [[x, 0.0, -hz], [x, 0.0, hz], [-hx, 0.0, z], [hx, 0.0, z]] {
+                let Some((px, py)) = common::project(&image, &view, point) else { continue };
+                for y in py.saturating_sub(3)..(py + 4).min(image.height()) {
+                    for x in px.saturating_sub(1)..(px + 2).min(image.width()) {
+                        let p = image.get_pixel(x, y);
+                        checked += 1;
+                        assert!(
+                            p.0[..3].iter().any(|&c| c > 12),
+                            "a black pixel {p:?} at ({x}, {y}) on the horizon of the view from {:?}, {size:?}",
+                            view.pose.position
+                        );
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "the horizon is on screen ({checked} pixels checked)");
+    }
+}

@@ -77,9 +77,12 @@ impl SourceFile {
                 Ok(())
             }
         };
-        // Before opening: opening a named pipe would wait for a writer.
-        check(&std::fs::metadata(path).map_err(io)?)?;
-        let file = std::fs::File::open(path).map_err(io)?;
+        // Opened without waiting on a named pipe, and refused unless a regular file.
+        let file = atomic_file::open_regular(path).map_err(|e| match atomic_file::not_regular(&e) {
+            Some(atomic_file::NotRegular::Directory) => ReadError::Directory { path: path.to_path_buf() },
+            Some(atomic_file::NotRegular::Special) => ReadError::NotAFile { path: path.to_path_buf() },
+            None => io(e),
+        })?;
         let metadata = file.metadata().map_err(io)?;
         check(&metadata)?;
         let bytes = match read_in_parallel(&file, metadata.len()) {

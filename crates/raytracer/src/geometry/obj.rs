@@ -108,11 +108,21 @@ pub struct ObjError {
 pub fn load_obj(path: &Path, transform: &MeshTransform) -> Result<LoadedObj, ObjError> {
     let file = path.display().to_string();
     let fail = |message: String| ObjError { file: file.clone(), line: None, message };
-    let size = std::fs::metadata(path).map_err(|e| fail(format!("cannot read it: {e}")))?.len();
+    let cannot_read = |e: std::io::Error| match atomic_file::not_regular(&e) {
+        Some(_) => fail(e.to_string()),
+        None => fail(format!("cannot read it: {e}")),
+    };
+    let opened = atomic_file::open_regular(path).map_err(cannot_read)?;
+    let size = opened.metadata().map_err(cannot_read)?.len();
     if size > MAX_OBJ_BYTES {
         return Err(fail(format!("it is {size} bytes; meshes of at most {MAX_OBJ_BYTES} bytes are read")));
     }
-    let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read it: {e}")))?;
+    let mut bytes = Vec::with_capacity(size as usize);
+    // The bound is on what is read: the file may grow meanwhile.
+    opened.take(MAX_OBJ_BYTES + 1).read_to_end(&mut bytes).map_err(cannot_read)?;
+    if bytes.len() as u64 > MAX_OBJ_BYTES {
+        return Err(fail(format!("it is over {MAX_OBJ_BYTES} bytes; meshes of at most that are read")));
+    }
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse_obj(&bytes, &file, &dir, transform)
 }
@@ -129,6 +139,7 @@ pub fn parse_obj(
     let fail = |line: Option<u32>, message: String| ObjError { file: file.to_owned(), line, message };
     // Only ASCII matters outside comments (which may be GBK, as in the course's files).
     let text = String::from_utf8_lossy(bytes);
+    let text = joined_continuations(&text);
     check_faces(&text).map_err(|(line, message)| fail(Some(line), message))?;
     let text = without_polylines(&text);
     let mut reader = LineReader { data: text.as_bytes(), pos: 0 };
@@ -256,11 +267,8 @@ pub fn parse_obj(
 /// The bytes of the material library at `path`, if it is a regular file of at most
 /// [`MAX_MTL_BYTES`] (not a device or a pipe that never ends); otherwise why not.
 fn read_material_library(path: &Path) -> Result<Vec<u8>, String> {
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let meta = file.metadata().map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        return Err("it is not a regular file".into());
-    }
+    // Refused unless a regular file, without waiting on a named pipe.
+    let file = atomic_file::open_regular(path).map_err(|e| e.to_string())?;
     let mut bytes = Vec::new();
     // A file may grow, or say it is empty (as those in /proc do): the bound is on what is read.
     file.take(MAX_MTL_BYTES + 1).read_to_end(&mut bytes).map_err(|e| e.to_string())?;
@@ -276,6 +284,49 @@ fn first_mtllib(text: &str) -> Option<(u32, String)> {
         let rest = l.trim_start().strip_prefix("mtllib")?;
         Some((i as u32 + 1, rest.trim().to_owned()))
     })
+}
+
+/// The text with every statement continued over several lines (a backslash ending a line, before
+/// `\n` or `\r\n`) joined into one line where it starts: each backslash and the line break after
+/// it become spaces, and the line breaks are put back after the statement as empty lines, so
+/// every line keeps its number and an error in a joined statement names its first line.
+/// Comments are never continued: a comment may end with the second byte of a GBK character,
+/// which can be a backslash.
+fn joined_continuations(text: &str) -> std::borrow::Cow<'_, str> {
+    let continues = |line: &str| {
+        let body = line.strip_suffix('\n').unwrap_or(line);
+        let body = body.strip_suffix('\r').unwrap_or(body);
+        body.ends_with('\\')
+    };
+    if !text.split_inclusive('\n').any(continues) {
+        return text.into();
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut held_breaks = 0;
+    let mut in_statement = false;
+    for line in text.split_inclusive('\n') {
+        let starts_comment = !in_statement && line.trim_start().starts_with('#');
+        if continues(line) && !starts_comment {
+            let body = line.strip_suffix('\n').unwrap_or(line);
+            let body = body.strip_suffix('\r').unwrap_or(body);
+            out.push_str(&body[..body.len() - 1]);
+            out.push(' ');
+            held_breaks += usize::from(line.ends_with('\n'));
+            in_statement = true;
+        } else {
+            out.push_str(line);
+            for _ in 0..held_breaks {
+                out.push('\n');
+            }
+            held_breaks = 0;
+            in_statement = false;
+        }
+    }
+    // A backslash on the last line continues nothing.
+    for _ in 0..held_breaks {
+        out.push('\n');
+    }
+    out.into()
 }
 
 /// The text with every polyline (`l`) made a comment, byte for byte in place (so lines keep
@@ -504,6 +555,34 @@ mod tests {
             "{:?}",
             m.warnings
         );
+    }
+
+    /// Issue 31, defect 5: a backslash ending a line continues the statement on the next (with
+    /// LF or CRLF line ends), and errors name the line where the statement starts.
+    #[test]
+    fn backslashes_continue_lines_and_errors_keep_their_lines() {
+        for eol in ["\n", "\r\n"] {
+            let text = [
+                "v 0 0 0", "v 1 0 0", "v 0 1 0", "v 1 1 \\", "  0", "f 1 2 \\", " 3", "f 2 \\", "4 \\", "3",
+                "",
+            ]
+            .join(eol);
+            let obj = load(&text).unwrap_or_else(|e| panic!("{eol:?}: {e}"));
+            assert_eq!(obj.vertices.positions.len(), 4, "{eol:?}");
+            assert_eq!(obj.groups.iter().map(|g| g.1.len()).sum::<usize>(), 2, "{eol:?}");
+            // The face that starts on line 4 (after a continued vertex) is wrong: line 4 it is.
+            let text = ["v 0 0 \\", "0", "v 1 0 0", "f 1 2 \\", " 9", "v 0 1 0", "f 1 2 7", ""].join(eol);
+            let error = load(&text).expect_err("out of range").to_string();
+            assert!(error.contains("m.obj:4: vertex index 9"), "{eol:?}: {error}");
+            let text = ["v 0 0 \\", "0", "v 1 0 0", "f 1 2 \\", " 2", "v 0 1 0", "f 1 2 7", ""].join(eol);
+            let error = load(&text).expect_err("out of range").to_string();
+            assert!(error.contains("m.obj:7: vertex index 7"), "{eol:?}: {error}");
+        }
+        // A comment is never continued (it may end with half a GBK character).
+        let obj = load("# \\\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").expect("valid");
+        assert_eq!(obj.vertices.positions.len(), 3);
+        assert_eq!(joined_continuations("f 1 \\\n2 3\nv 1"), "f 1  2 3\n\nv 1");
+        assert_eq!(joined_continuations("f 1 \\"), "f 1  ");
     }
 
     #[test]

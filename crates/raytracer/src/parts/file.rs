@@ -103,7 +103,7 @@ fn text(value: &str) -> Text {
 /// Reads a part file written by [`write_part`], its pixels within the default memory budget
 /// ([`MemoryBudget::default`]).
 pub fn read_part(path: &Path) -> Result<Part, PartError> {
-    let file = std::fs::File::open(path).map_err(|e| PartError::read(path, e))?;
+    let file = atomic_file::open_regular(path).map_err(|e| PartError::read(path, e))?;
     read_part_from(BufReader::new(file), path, &MemoryBudget::default())
 }
 

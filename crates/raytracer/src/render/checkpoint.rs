@@ -124,7 +124,8 @@ impl Checkpoint {
             sppm_interval: Duration::from_secs(10),
             resumed: (0, 0),
         };
-        match File::open(path) {
+        // Never waits on a named pipe; a folder or device is refused.
+        match atomic_file::open_regular(path) {
             Ok(file) => checkpoint.read(file)?,
             Err(e) if e.kind() == io::ErrorKind::NotFound => {}
             Err(e) => return Err(io_error(path, e)),

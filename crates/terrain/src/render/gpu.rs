@@ -332,7 +332,22 @@ fn advice() -> &'static str {
 
 fn describe(info: &wgpu::AdapterInfo) -> String {
     let driver = if info.driver_info.is_empty() { String::new() } else { format!(" ({})", info.driver_info) };
-    format!("{}{driver} [{:?}, {:?}]", info.name, info.backend, info.device_type)
+    let device = match info.device_type {
+        wgpu::DeviceType::IntegratedGpu => "integrated GPU",
+        wgpu::DeviceType::DiscreteGpu => "discrete GPU",
+        wgpu::DeviceType::VirtualGpu => "virtual GPU",
+        wgpu::DeviceType::Cpu => "software, on the CPU",
+        wgpu::DeviceType::Other => "other device",
+    };
+    let backend = match info.backend {
+        wgpu::Backend::Vulkan => "Vulkan",
+        wgpu::Backend::Metal => "Metal",
+        wgpu::Backend::Dx12 => "Direct3D 12",
+        wgpu::Backend::Gl => "OpenGL",
+        wgpu::Backend::BrowserWebGpu => "WebGPU",
+        wgpu::Backend::Noop => "no backend",
+    };
+    format!("{}{driver} [{backend}, {device}]", info.name)
 }
 
 #[cfg(test)]

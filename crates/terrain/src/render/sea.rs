@@ -136,22 +136,36 @@ impl SeaPass {
 /// colour (the cells near the camera, where they are largest on screen, have no fog).
 const SEA_CELLS: u16 = 48;
 
-/// The water plane over the sky box's floor as a grid of `SEA_CELLS` x `SEA_CELLS` cells,
-/// counter-clockwise seen from above.
+/// How far the water reaches beyond the sky box's walls, in world units: a skirt of one cell
+/// around the grid, hidden behind the walls. The water's edge meets each wall's bottom edge in
+/// T-junctions (many vertices against one edge), where rounding can leave pixels that neither
+/// covers, which showed the black the frame is cleared to; beyond the walls, the skirt fills
+/// them (issue 31). Well within the far plane.
+const SKIRT: f32 = 20.0;
+
+/// The water plane over the sky box's floor as a grid of `SEA_CELLS` x `SEA_CELLS` cells, with a
+/// skirt of [`SKIRT`] units beyond the walls all around, counter-clockwise seen from above. The
+/// grid's own vertices are where they would be without the skirt.
 fn sea_mesh(config: &SceneConfig) -> (Vec<[f32; 3]>, Vec<u16>) {
     let (hx, hz) = (config.sky_box_size.x / 2.0, config.sky_box_size.z / 2.0);
     let n = SEA_CELLS;
-    let mut positions = Vec::with_capacity(usize::from((n + 1) * (n + 1)));
-    for i in 0..=n {
-        for j in 0..=n {
-            let (u, v) = (f32::from(j) / f32::from(n), f32::from(i) / f32::from(n));
-            positions.push([-hx + 2.0 * hx * u, 0.0, -hz + 2.0 * hz * v]);
+    // The lines of the grid along one side: the skirt's, then the box's, then the skirt's.
+    let lines = |half: f32| -> Vec<f32> {
+        let inside = (0..=n).map(|j| -half + 2.0 * half * (f32::from(j) / f32::from(n)));
+        std::iter::once(-half - SKIRT).chain(inside).chain(std::iter::once(half + SKIRT)).collect()
+    };
+    let (xs, zs) = (lines(hx), lines(hz));
+    let m = n + 2;
+    let mut positions = Vec::with_capacity(usize::from((m + 1) * (m + 1)));
+    for &z in &zs {
+        for &x in &xs {
+            positions.push([x, 0.0, z]);
         }
     }
-    let at = |i: u16, j: u16| i * (n + 1) + j;
-    let mut indices = Vec::with_capacity(usize::from(n * n) * 6);
-    for i in 0..n {
-        for j in 0..n {
+    let at = |i: u16, j: u16| i * (m + 1) + j;
+    let mut indices = Vec::with_capacity(usize::from(m * m) * 6);
+    for i in 0..m {
+        for j in 0..m {
             let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1));
             indices.extend([a, b, c, c, b, d]);
         }
@@ -199,6 +213,29 @@ mod tests {
             assert!(normal.y > 0.0);
             area += normal.y / 2.0;
         }
-        assert!((area - 200.0 * 280.0).abs() < 56.0, "{area}");
+        let skirted = (200.0 + 2.0 * SKIRT) * (280.0 + 2.0 * SKIRT);
+        assert!((area - skirted).abs() < 56.0, "{area}");
+    }
+
+    /// Issue 31, defect 10: the water reaches beyond the walls, and its vertices inside the box
+    /// are where the plain grid puts them (the picture inside the box does not move).
+    #[test]
+    fn the_sea_reaches_beyond_the_walls_with_its_grid_in_place() {
+        let config = SceneConfig::default();
+        let (positions, _) = sea_mesh(&config);
+        let (hx, hz) = (config.sky_box_size.x / 2.0, config.sky_box_size.z / 2.0);
+        let max_x = positions.iter().map(|p| p[0]).fold(f32::MIN, f32::max);
+        let max_z = positions.iter().map(|p| p[2]).fold(f32::MIN, f32::max);
+        assert!(max_x > hx && max_z > hz);
+        // From any corner of the box, the far corner of the skirt is within the far plane.
+        assert!(glam::Vec2::new(max_x + hx, max_z + hz).length() < config.far);
+        let n = SEA_CELLS;
+        for i in 0..=n {
+            for j in 0..=n {
+                let (u, v) = (f32::from(j) / f32::from(n), f32::from(i) / f32::from(n));
+                let plain = [-hx + 2.0 * hx * u, 0.0, -hz + 2.0 * hz * v];
+                assert!(positions.contains(&plain), "{plain:?}");
+            }
+        }
     }
 }

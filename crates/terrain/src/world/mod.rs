@@ -214,7 +214,9 @@ pub const MAX_IMAGE_SIDE: u32 = 16_384;
 /// nothing decoded yet.
 fn open_decoder(path: &Path) -> Result<impl image::ImageDecoder, WorldError> {
     let read = |source| WorldError::Read { path: path.to_path_buf(), source };
-    header_decoder(image::ImageReader::open(path).map_err(read)?, path)
+    // Never waits on a named pipe; a folder or device is refused.
+    let file = atomic_file::open_regular(path).map_err(read)?;
+    header_decoder(image::ImageReader::new(std::io::BufReader::new(file)), path)
 }
 
 /// The decoder of an image read from `reader` (`path` names it in messages), as
