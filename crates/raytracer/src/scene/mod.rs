@@ -4,6 +4,7 @@
 //! [0, 1], light colours may exceed 1).
 
 mod diagnostic;
+pub mod mitsuba;
 mod parser;
 mod source;
 
