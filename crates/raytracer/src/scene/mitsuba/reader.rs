@@ -235,7 +235,15 @@ impl Reader {
         roxmltree::Document::parse_with_options(text, options).map_err(|e| {
             let p = e.pos();
             let span = Span { line: p.row, column: p.col, len: 1 };
-            MitsubaError::Xml { at: self.files[file as usize].location(span), message: e.to_string() }
+            // roxmltree's message ends with its own ` at line:column`, which the place shows.
+            let message = e.to_string();
+            let message = match message.rsplit_once(" at ") {
+                Some((head, tail)) if tail.bytes().all(|b| b.is_ascii_digit() || b == b':') => {
+                    head.to_owned()
+                }
+                _ => message,
+            };
+            MitsubaError::Xml { at: self.files[file as usize].location(span), message }
         })
     }
 
