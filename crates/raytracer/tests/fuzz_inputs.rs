@@ -53,6 +53,30 @@ fn scene_parser_inputs() {
 }
 
 #[test]
+fn mitsuba_xml_inputs() {
+    use raytracer::scene::mitsuba;
+    for (path, bytes) in inputs("mitsuba_xml") {
+        // As the fuzz target does: the text without a folder, `spp` defined.
+        let source = SourceFile::from_bytes(path.display().to_string(), None, bytes.as_slice());
+        let defines = [("spp".to_owned(), "4".to_owned())];
+        let read = mitsuba::read_source(source, &defines);
+        let name = path.to_string_lossy();
+        if name.contains("/seeds/") {
+            // The seeds that show errors fail; the others read.
+            assert_eq!(read.is_err(), name.contains("errors"), "{name}: {read:?}");
+        }
+        match read {
+            Ok(doc) => {
+                for plugin in doc.plugins() {
+                    assert!(plugin.children.iter().all(|c| doc.target(c).is_some()), "{name}");
+                }
+            }
+            Err(error) => drop(error.diagnostic().to_string()),
+        }
+    }
+}
+
+#[test]
 fn texture_decoder_inputs() {
     for (path, bytes) in inputs("texture_decoder") {
         let budget = MemoryBudget::new(256 << 20);
