@@ -16,16 +16,26 @@
 //! Every error names the file, line and column ([`MitsubaError`]); no input panics, and the
 //! files, their elements and their nesting are bounded ([`MAX_XML_FILE_BYTES`] and the others).
 //!
-//! ```no_run
-//! use std::path::Path;
-//! use raytracer::scene::mitsuba::{self, PluginKind};
+//! ```
+//! use raytracer::scene::SourceFile;
+//! use raytracer::scene::mitsuba::{self, PluginKind, Value};
 //!
-//! let defines = [("spp".to_owned(), "16".to_owned())];
-//! let doc = mitsuba::read_file(Path::new("cbox.xml"), &defines)?;
-//! for shape in doc.plugins().filter(|p| p.kind == PluginKind::Shape) {
-//!     println!("{} at {}", shape.type_name, doc.place(shape.pos));
-//! }
-//! # Ok::<(), mitsuba::MitsubaError>(())
+//! let text = r#"<scene version="3.0.0">
+//!     <default name="spp" value="64"/>
+//!     <sensor type="perspective">
+//!         <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+//!     </sensor>
+//!     <shape type="sphere"><float name="radius" value="0.5"/></shape>
+//! </scene>"#;
+//! let source = SourceFile::from_text("scene.xml", None, text.to_owned());
+//! // As `mitsuba -D spp=16 scene.xml`; `mitsuba::read_file(path, &defines)` reads a file.
+//! let defines = [mitsuba::parse_define("spp=16")?];
+//! let doc = mitsuba::read_source(source, &defines)?;
+//! let sampler = doc.plugins().find(|p| p.kind == PluginKind::Sampler).expect("a sampler");
+//! assert_eq!(sampler.property("sample_count").map(|p| &p.value), Some(&Value::Integer(16)));
+//! let shape = doc.plugins().find(|p| p.kind == PluginKind::Shape).expect("a shape");
+//! assert_eq!(doc.place(shape.pos), "scene.xml:6:5");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 mod cie;
