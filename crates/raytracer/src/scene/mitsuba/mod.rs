@@ -59,7 +59,7 @@ pub use cie::{
     xyz_to_srgb,
 };
 pub use error::MitsubaError;
-pub use params::{DefineError, MAX_SUBSTITUTED_BYTES, parse_define};
+pub use params::{DefineError, MAX_PARAMETERS, MAX_SUBSTITUTED_BYTES, parse_define};
 pub use spectrum::{MAX_SPECTRUM_SAMPLES, Spectrum, SpectrumUse, spectrum_list_to_srgb};
 pub use tree::{Child, Node, Plugin, PluginKind, Pos, Property, Value};
 pub use upgrade::Version;
@@ -95,8 +95,11 @@ pub struct Document {
     /// looked up in, in order: the first file's `<path>` folders (the last one first), then its
     /// own folder (Mitsuba's file resolver after reading the scene).
     pub resolver: Vec<PathBuf>,
-    /// Each id's plugin, as the child indices from the root.
-    ids: HashMap<String, Vec<u32>>,
+    /// Each id's plugin, by serial number (the tree's preorder).
+    ids: HashMap<String, u32>,
+    /// Each plugin's parent (serial number) and index among the parent's children, by serial
+    /// number; the root's parent is `u32::MAX`.
+    parents: Vec<(u32, u32)>,
     /// Warnings about the scene (unused `-D` definitions).
     pub warnings: Vec<Diagnostic>,
 }
@@ -104,8 +107,16 @@ pub struct Document {
 impl Document {
     /// The plugin declared with `id` (or an alias of it).
     pub fn get(&self, id: &str) -> Option<&Plugin> {
+        // The child indices from the root, found upwards from the plugin.
+        let mut path = Vec::new();
+        let mut serial = *self.ids.get(id)?;
+        while serial != 0 {
+            let &(parent, index) = self.parents.get(serial as usize)?;
+            path.push(index);
+            serial = parent;
+        }
         let mut p = &self.root;
-        for &i in self.ids.get(id)? {
+        for &i in path.iter().rev() {
             match &p.children.get(i as usize)?.node {
                 Node::Plugin(child) => p = child,
                 Node::Reference(_) => return None,

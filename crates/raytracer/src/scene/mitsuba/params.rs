@@ -3,6 +3,9 @@
 
 /// Longest attribute value after substitution, in bytes.
 pub const MAX_SUBSTITUTED_BYTES: usize = 1 << 20;
+/// Most parameters (`<default>`s and `-D` definitions) of one scene: each attribute with a `$`
+/// is searched for each of them.
+pub const MAX_PARAMETERS: usize = 1000;
 
 /// A `-D` argument that is not `name=value`.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -80,12 +83,16 @@ impl Params {
     }
 
     /// `<default name="..." value="...">`: sets the parameter unless the caller or an earlier
-    /// `<default>` already did.
-    pub fn set_default(&mut self, name: &str, value: &str) {
+    /// `<default>` already did. `false` when there are [`MAX_PARAMETERS`] already.
+    pub fn set_default(&mut self, name: &str, value: &str) -> bool {
         let key = format!("${name}");
         if !self.list.iter().any(|p| p.key == key) {
+            if self.list.len() >= MAX_PARAMETERS {
+                return false;
+            }
             self.insert(Param { key, value: value.to_owned(), used: true, from_caller: false });
         }
+        true
     }
 
     /// The caller's definitions that no attribute used, in the order given.
@@ -150,9 +157,9 @@ mod tests {
     #[test]
     fn defaults_do_not_override_the_caller_nor_earlier_defaults() {
         let mut p = defines(&[("res", "32")]);
-        p.set_default("res", "256");
-        p.set_default("spp", "8");
-        p.set_default("spp", "9");
+        assert!(p.set_default("res", "256"));
+        assert!(p.set_default("spp", "8"));
+        assert!(p.set_default("spp", "9"));
         assert_eq!(p.substitute("$res $spp"), Some(Ok("32 8".to_owned())));
     }
 
@@ -177,6 +184,16 @@ mod tests {
         let big = "x".repeat(MAX_SUBSTITUTED_BYTES / 2);
         let mut p = defines(&[("big", &big)]);
         assert_eq!(p.substitute("$big $big $big"), Some(Err(SubstituteError::TooLong)));
+    }
+
+    #[test]
+    fn parameters_are_bounded() {
+        let mut p = Params::default();
+        for i in 0..MAX_PARAMETERS {
+            assert!(p.set_default(&format!("p{i}"), "1"));
+        }
+        assert!(p.set_default("p0", "2"), "an existing name is no new parameter");
+        assert!(!p.set_default("one_more", "1"));
     }
 
     #[test]

@@ -52,10 +52,10 @@ struct FileCtx {
     chain: Vec<(PathBuf, String)>,
 }
 
-/// Where an id points: the path of child indices from the root, and where it was declared.
+/// Where an id points: the plugin's serial number, and where the id was declared.
 #[derive(Clone)]
 struct IdEntry {
-    path: Vec<u32>,
+    serial: u32,
     pos: Pos,
 }
 
@@ -63,6 +63,8 @@ struct IdEntry {
 struct RefRecord {
     id: String,
     pos: Pos,
+    /// The serial number of the plugin holding the reference.
+    holder: u32,
 }
 
 /// The reader's state across all files of a document.
@@ -72,15 +74,24 @@ pub(super) struct Reader {
     params: Params,
     ids: HashMap<String, IdEntry>,
     refs: Vec<RefRecord>,
+    /// For each plugin, by serial number (the order plugins are met, which is the tree's
+    /// preorder): its parent's serial number and its index among the parent's children.
+    parents: Vec<(u32, u32)>,
+    /// The parameter names given in each plugin (by serial number), with where.
+    names: HashMap<(u32, String), Pos>,
+    /// Per file, the last position computed: byte offset, line index and column (0-based, in
+    /// characters), from which the next one is counted when it is further on the same line.
+    last_pos: Vec<std::cell::Cell<(usize, usize, usize)>>,
     elements: usize,
     total_bytes: u64,
     warnings: Vec<Diagnostic>,
 }
 
 /// The parameters of an element's read.
-struct Here<'p> {
-    /// The path of child indices of the plugin the element belongs to.
-    path: &'p mut Vec<u32>,
+#[derive(Clone, Copy)]
+struct Here {
+    /// The serial number of the plugin the element belongs to.
+    serial: u32,
     /// Elements above this one (in all files).
     depth: usize,
     /// Whether the parent is the root element of its file (where `<path>` may be).
@@ -95,6 +106,9 @@ impl Reader {
             params: Params::from_defines(defines),
             ids: HashMap::new(),
             refs: Vec::new(),
+            parents: Vec::new(),
+            names: HashMap::new(),
+            last_pos: Vec::new(),
             elements: 0,
             total_bytes: 0,
             warnings: Vec::new(),
@@ -108,6 +122,7 @@ impl Reader {
         let mut starts = vec![0];
         starts.extend(memchr::memchr_iter(b'\n', text.as_bytes()).map(|i| i + 1));
         self.line_starts.push(starts);
+        self.last_pos.push(std::cell::Cell::new((0, 0, 0)));
         self.files.push(source);
         (self.files.len() - 1) as u32
     }
@@ -120,7 +135,16 @@ impl Reader {
         let line = starts.partition_point(|&s| s <= start).max(1);
         let line_start = starts[line - 1];
         let line_end = starts.get(line).map_or(text.len(), |&s| s - 1);
-        let column = text.get(line_start..start).map_or(1, |t| t.chars().count() + 1);
+        // Counted on from the last position when it is earlier on the same line: elements and
+        // attributes are met in file order, so a long line is not counted again for each.
+        let cache = &self.last_pos[file as usize];
+        let (from, from_column) = match cache.get() {
+            (offset, l, c) if l == line - 1 && offset <= start => (offset, c),
+            _ => (line_start, 0),
+        };
+        let column = text.get(from..start).map_or(0, |t| t.chars().count()) + from_column;
+        cache.set((start, line - 1, column));
+        let column = column + 1;
         let end = range.end.clamp(start, line_end.max(start));
         let len = text.get(start..end).map_or(1, |t| t.chars().count().max(1));
         Pos { file, span: Span { line: line as u32, column: column as u32, len: len as u32 } }
@@ -219,9 +243,7 @@ impl Reader {
                 ),
             });
         }
-        let mut path = Vec::new();
-        let root_plugin =
-            self.object(&mut ctx, root, Here { path: &mut path, depth: 0, at_file_root: false }, true)?;
+        let root_plugin = self.object(&mut ctx, root, 0, None, true)?;
         self.finish(root_plugin, version, ctx.resolver)
     }
 
@@ -273,6 +295,7 @@ impl Reader {
             }
         }
         self.check_cycles(&root)?;
+        let parents = std::mem::take(&mut self.parents);
         let unused: Vec<String> =
             self.params.unused().map(|p| format!("{}={}", &p.key[1..], p.value)).collect();
         for define in unused {
@@ -281,57 +304,49 @@ impl Reader {
                 format!("the definition -D {define} is not used by the scene"),
             ));
         }
-        let ids = self.ids.into_iter().map(|(id, e)| (id, e.path)).collect();
-        Ok(Document { root, files: self.files, version, resolver, ids, warnings: self.warnings })
+        let ids = self.ids.into_iter().map(|(id, e)| (id, e.serial)).collect();
+        Ok(Document { root, files: self.files, version, resolver, ids, parents, warnings: self.warnings })
     }
 
     /// Refuses plugins that need themselves: a plugin needs its nested plugins and the targets
     /// of its references; a loop through those is a circular reference.
     fn check_cycles(&self, root: &Plugin) -> Result<()> {
-        // Number the plugins (preorder) and list each one's needs.
-        let mut index: HashMap<Vec<u32>, usize> = HashMap::new();
-        let mut nodes: Vec<(&Plugin, Vec<u32>)> = Vec::new();
-        let mut stack = vec![(root, Vec::new())];
-        while let Some((p, path)) = stack.pop() {
-            index.insert(path.clone(), nodes.len());
-            for (i, c) in p.children.iter().enumerate() {
-                if let Node::Plugin(child) = &c.node {
-                    let mut child_path = path.clone();
-                    child_path.push(i as u32);
-                    stack.push((child, child_path));
-                }
-            }
-            nodes.push((p, path));
-        }
-        // Edges: (target, the reference's position, if one).
-        let mut edges: Vec<Vec<(usize, Option<Pos>)>> = vec![Vec::new(); nodes.len()];
-        for (n, (p, path)) in nodes.iter().enumerate() {
-            for (i, c) in p.children.iter().enumerate() {
-                let target_path = match &c.node {
-                    Node::Plugin(_) => {
-                        let mut child_path = path.clone();
-                        child_path.push(i as u32);
-                        Some((child_path, None))
-                    }
-                    Node::Reference(id) => self.ids.get(id).map(|e| (e.path.clone(), Some(c.pos))),
-                };
-                if let Some((t, pos)) = target_path
-                    && let Some(&target) = index.get(&t)
-                {
-                    edges[n].push((target, pos));
-                }
+        // The plugins by serial number, and what each needs: its nested plugins (from
+        // `parents`) and the targets of its references.
+        let n = self.parents.len();
+        let mut edges: Vec<Vec<(usize, Option<Pos>)>> = vec![Vec::new(); n];
+        for (serial, &(parent, _)) in self.parents.iter().enumerate().skip(1) {
+            if let Some(list) = edges.get_mut(parent as usize) {
+                list.push((serial, None));
             }
         }
+        for r in &self.refs {
+            if let (Some(target), Some(list)) = (self.ids.get(&r.id), edges.get_mut(r.holder as usize)) {
+                list.push((target.serial as usize, Some(r.pos)));
+            }
+        }
+        // The plugins in preorder, which is their serial order, for messages.
+        let nodes = || {
+            let mut out = Vec::with_capacity(n);
+            let mut stack = vec![root];
+            while let Some(p) = stack.pop() {
+                out.push(p);
+                let at = stack.len();
+                stack.extend(p.inline_children());
+                stack[at..].reverse();
+            }
+            out
+        };
         // Iterative depth-first search: 0 unseen, 1 on the stack, 2 done.
-        let mut state = vec![0u8; nodes.len()];
-        for start in 0..nodes.len() {
+        let mut state = vec![0u8; n];
+        for start in 0..n {
             if state[start] != 0 {
                 continue;
             }
             let mut stack: Vec<(usize, usize)> = vec![(start, 0)];
             state[start] = 1;
-            while let Some(&mut (n, ref mut next)) = stack.last_mut() {
-                if let Some(&(target, pos)) = edges[n].get(*next) {
+            while let Some(&mut (node, ref mut next)) = stack.last_mut() {
+                if let Some(&(target, pos)) = edges[node].get(*next) {
                     *next += 1;
                     match state[target] {
                         0 => {
@@ -339,11 +354,13 @@ impl Reader {
                             stack.push((target, 0));
                         }
                         1 => {
+                            let nodes = nodes();
+                            let name = |m: usize| nodes.get(m).map_or_else(String::new, |p| describe(p));
                             let from = stack.iter().position(|&(m, _)| m == target).unwrap_or(0);
                             let mut names: Vec<String> =
-                                stack[from..].iter().map(|&(m, _)| describe(nodes[m].0)).collect();
-                            names.push(describe(nodes[target].0));
-                            let at = pos.unwrap_or(nodes[n].0.pos);
+                                stack[from..].iter().map(|&(m, _)| name(m)).collect();
+                            names.push(name(target));
+                            let at = pos.or_else(|| nodes.get(node).map(|p| p.pos)).unwrap_or(root.pos);
                             return Err(MitsubaError::CircularReference {
                                 at: self.location(at),
                                 chain: names.join(" -> "),
@@ -352,7 +369,7 @@ impl Reader {
                         _ => {}
                     }
                 } else {
-                    state[n] = 2;
+                    state[node] = 2;
                     stack.pop();
                 }
             }
@@ -442,33 +459,39 @@ impl Reader {
     }
 
     /// Reads an object element (`<bsdf>`, `<shape>`, the `<scene>`...) and its contents.
+    /// `link` is the parent's serial number and the plugin's index among its children (none for
+    /// the root); `is_root` whether the element is the root of its file.
     fn object(
         &mut self,
         ctx: &mut FileCtx,
         node: roxmltree::Node,
-        here: Here,
+        depth: usize,
+        link: Option<(u32, u32)>,
         is_root: bool,
     ) -> Result<Plugin> {
-        self.count(ctx, node, here.depth)?;
+        self.count(ctx, node, depth)?;
+        let serial = self.parents.len() as u32;
+        self.parents.push(link.unwrap_or((u32::MAX, 0)));
         let tag = node.tag_name().name();
         let kind = PluginKind::from_tag(tag).unwrap_or(PluginKind::Texture);
+        // The element's place first: positions are counted on from the last one.
+        let pos = self.element_pos(ctx.index, node);
         let attrs = self.attrs(ctx, node)?;
         if is_root {
             self.check_attrs(ctx, node, &attrs, &["type", "id", "name"], &["version"])?;
         } else {
             self.check_attrs(ctx, node, &attrs, &["id", "name"], &["type"])?;
         }
-        let pos = self.element_pos(ctx.index, node);
         let type_name = attrs.get("type").map_or_else(|| tag.to_owned(), |a| a.value.clone());
         let id = attrs.get("id").map(|a| a.value.clone());
         if let Some(id) = &id {
-            self.declare_id(id, here.path.clone(), pos)?;
+            self.declare_id(id, serial, pos)?;
         }
         let name = attrs.get("name").map(|a| self.prop_name(ctx, &a.value));
         let mut plugin =
             Plugin { kind, type_name, id, name, properties: Vec::new(), children: Vec::new(), pos };
         for child in node.children().filter(roxmltree::Node::is_element) {
-            let sub = Here { path: &mut *here.path, depth: here.depth + 1, at_file_root: is_root };
+            let sub = Here { serial, depth: depth + 1, at_file_root: is_root };
             self.element(ctx, child, &mut plugin, sub)?;
         }
         if ctx.upgrade {
@@ -477,7 +500,7 @@ impl Reader {
         Ok(plugin)
     }
 
-    fn declare_id(&mut self, id: &str, path: Vec<u32>, pos: Pos) -> Result<()> {
+    fn declare_id(&mut self, id: &str, serial: u32, pos: Pos) -> Result<()> {
         if let Some(previous) = self.ids.get(id) {
             return Err(MitsubaError::DuplicateId {
                 at: self.location(pos),
@@ -485,7 +508,7 @@ impl Reader {
                 previous: self.place(previous.pos),
             });
         }
-        self.ids.insert(id.to_owned(), IdEntry { path, pos });
+        self.ids.insert(id.to_owned(), IdEntry { serial, pos });
         Ok(())
     }
 
@@ -494,21 +517,22 @@ impl Reader {
         if ctx.upgrade { camel_to_snake(name) } else { name.to_owned() }
     }
 
-    /// Refuses a second property or named child called `name` in `plugin`.
-    fn check_unique(&self, plugin: &Plugin, name: &str, pos: Pos) -> Result<()> {
-        let previous = plugin
-            .properties
-            .iter()
-            .find(|p| p.name == name)
-            .map(|p| p.pos)
-            .or_else(|| plugin.children.iter().find(|c| c.name.as_deref() == Some(name)).map(|c| c.pos));
-        match previous {
-            Some(previous) => Err(MitsubaError::DuplicateProperty {
-                at: self.location(pos),
-                name: name.to_owned(),
-                previous: self.place(previous),
-            }),
-            None => Ok(()),
+    /// Refuses a second property or named child called `name` in the plugin of serial number
+    /// `serial`, and remembers this one.
+    fn check_unique(&mut self, serial: u32, name: &str, pos: Pos) -> Result<()> {
+        match self.names.entry((serial, name.to_owned())) {
+            std::collections::hash_map::Entry::Occupied(first) => {
+                let previous = *first.get();
+                Err(MitsubaError::DuplicateProperty {
+                    at: self.location(pos),
+                    name: name.to_owned(),
+                    previous: self.place(previous),
+                })
+            }
+            std::collections::hash_map::Entry::Vacant(slot) => {
+                slot.insert(pos);
+                Ok(())
+            }
         }
     }
 
@@ -527,13 +551,9 @@ impl Reader {
         }
         if PluginKind::from_tag(tag).is_some() || is_typed_spectrum(node) {
             let index = parent.children.len() as u32;
-            here.path.push(index);
-            let sub = Here { path: &mut *here.path, depth: here.depth, at_file_root: false };
-            let plugin = self.object(ctx, node, sub, false);
-            here.path.pop();
-            let plugin = plugin?;
+            let plugin = self.object(ctx, node, here.depth, Some((here.serial, index)), false)?;
             if let Some(name) = &plugin.name {
-                self.check_unique(parent, name, plugin.pos)?;
+                self.check_unique(here.serial, name, plugin.pos)?;
             }
             parent.children.push(Child {
                 name: plugin.name.clone(),
@@ -551,10 +571,10 @@ impl Reader {
                 self.no_children(ctx, node)?;
                 let name = attrs.get("name").map(|a| self.prop_name(ctx, &a.value));
                 if let Some(name) = &name {
-                    self.check_unique(parent, name, pos)?;
+                    self.check_unique(here.serial, name, pos)?;
                 }
                 let id = attrs.get("id").map(|a| a.value.clone()).unwrap_or_default();
-                self.refs.push(RefRecord { id: id.clone(), pos });
+                self.refs.push(RefRecord { id: id.clone(), pos, holder: here.serial });
                 parent.children.push(Child { name, node: Node::Reference(id), pos });
             }
             "alias" => {
@@ -567,7 +587,7 @@ impl Reader {
                         id: src.value.clone(),
                     });
                 };
-                self.declare_id(&dst.value, entry.path, pos)?;
+                self.declare_id(&dst.value, entry.serial, pos)?;
             }
             "default" => {
                 self.check_attrs(ctx, node, &attrs, &[], &["name", "value"])?;
@@ -581,7 +601,12 @@ impl Reader {
                         message: "a <default> needs a name".into(),
                     });
                 }
-                self.params.set_default(&name.value, &value.value);
+                if !self.params.set_default(&name.value, &value.value) {
+                    return Err(MitsubaError::Limit {
+                        at: self.location(pos),
+                        message: format!("more than {} parameters", super::params::MAX_PARAMETERS),
+                    });
+                }
             }
             "path" => {
                 self.check_attrs(ctx, node, &attrs, &[], &["value"])?;
@@ -618,7 +643,7 @@ impl Reader {
                 self.check_attrs(ctx, node, &attrs, &[], &["name"])?;
                 let matrix = self.transform(ctx, node, &here)?;
                 let name = self.attr_name(ctx, &attrs);
-                self.check_unique(parent, &name, pos)?;
+                self.check_unique(here.serial, &name, pos)?;
                 parent.properties.push(Property { name, value: Value::Transform(matrix), pos });
             }
             "translate" | "rotate" | "scale" | "lookat" | "matrix" => {
@@ -637,7 +662,7 @@ impl Reader {
                 let value = self.property_value(ctx, node, tag, &attrs, pos)?;
                 self.no_children(ctx, node)?;
                 let name = self.attr_name(ctx, &attrs);
-                self.check_unique(parent, &name, pos)?;
+                self.check_unique(here.serial, &name, pos)?;
                 parent.properties.push(Property { name, value, pos });
             }
         }
@@ -968,7 +993,7 @@ impl Reader {
             let attrs = self.attrs(&inner, root)?;
             self.check_attrs(&inner, root, &attrs, &["type", "id", "name"], &["version"])?;
             for child in root.children().filter(roxmltree::Node::is_element) {
-                let sub = Here { path: &mut *here.path, depth: here.depth + 1, at_file_root: true };
+                let sub = Here { serial: here.serial, depth: here.depth + 1, at_file_root: true };
                 self.element(&mut inner, child, parent, sub)?;
             }
             return Ok(());
@@ -984,14 +1009,11 @@ impl Reader {
             });
         }
         let child_index = parent.children.len() as u32;
-        here.path.push(child_index);
-        let sub = Here { path: &mut *here.path, depth: here.depth + 1, at_file_root: false };
-        let plugin = self.object(&mut inner, root, sub, true);
-        here.path.pop();
-        let mut plugin = plugin?;
+        let mut plugin =
+            self.object(&mut inner, root, here.depth + 1, Some((here.serial, child_index)), true)?;
         plugin.name = attrs.get("name").map(|a| self.prop_name(ctx, &a.value));
         if let Some(name) = &plugin.name {
-            self.check_unique(parent, name, pos)?;
+            self.check_unique(here.serial, name, pos)?;
         }
         parent.children.push(Child {
             name: plugin.name.clone(),

@@ -396,6 +396,47 @@ fn nesting_is_bounded() {
     assert!(matches!(e, MitsubaError::Limit { .. }), "{e}");
 }
 
+#[test]
+fn very_deep_xml_is_refused_without_overflowing_the_stack() {
+    // Far deeper than the limit: the XML parser and the reader must not recurse on it.
+    let depth = 200_000;
+    let text = format!(
+        "<scene version=\"3.0.0\">{}{}</scene>",
+        "<bsdf type=\"a\">".repeat(depth),
+        "</bsdf>".repeat(depth)
+    );
+    let e = read(&text).expect_err("too deep");
+    assert!(matches!(e, MitsubaError::Limit { .. }), "{e}");
+}
+
+#[test]
+fn large_scenes_read_in_linear_time() {
+    // 100,000 properties of one plugin, all on one line, and as many plugins with ids: each
+    // position and each duplicate check costs the same whatever came before.
+    let n = 100_000;
+    let mut text = String::from("<scene version=\"3.0.0\"><bsdf type=\"x\">");
+    for i in 0..n {
+        text.push_str(&format!("<float name=\"p{i}\" value=\"{i}\"/>"));
+    }
+    text.push_str("</bsdf>");
+    for i in 0..n {
+        text.push_str(&format!(
+            "<texture type=\"t\" id=\"t{i}\"><ref id=\"t{}\"/></texture>",
+            (i + 1) % n + n * usize::from(i + 1 == n)
+        ));
+    }
+    text.push_str(&format!("<texture type=\"t\" id=\"t{}\"/></scene>", n));
+    let started = std::time::Instant::now();
+    let doc = read(&text).expect("reads");
+    assert_eq!(first(&doc, PluginKind::Bsdf).properties.len(), n);
+    let last = first(&doc, PluginKind::Bsdf).properties.last().expect("last");
+    // `<float name="pI" value="I"/>` takes 26 characters and twice the digits of I.
+    let before: usize = (0..n - 1).map(|i| 26 + 2 * i.to_string().len()).sum();
+    assert_eq!((last.pos.span.line, last.pos.span.column as usize), (1, 39 + before));
+    assert_eq!(doc.get(&format!("t{}", n / 2)).map(|p| p.pos.span.line), Some(1));
+    assert!(started.elapsed() < std::time::Duration::from_secs(20), "{:?}", started.elapsed());
+}
+
 /// Writes `files` (name, text) into a new temporary folder.
 fn folder(files: &[(&str, &str)]) -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("temp dir");
