@@ -76,6 +76,44 @@ fn mitsuba_xml_inputs() {
     }
 }
 
+/// As the mesh fuzz targets check: indices in range, attributes as long as the positions.
+fn check_mesh(mesh: &raytracer::geometry::mesh_file::MeshData, name: &str) {
+    let n = mesh.positions.len();
+    assert!(mesh.triangles.iter().all(|t| t.iter().all(|&i| (i as usize) < n)), "{name}");
+    assert!(mesh.normals.as_ref().is_none_or(|v| v.len() == n), "{name}");
+    assert!(mesh.uvs.as_ref().is_none_or(|v| v.len() == n), "{name}");
+}
+
+#[test]
+fn ply_mesh_inputs() {
+    for (path, bytes) in inputs("ply_mesh") {
+        let name = path.display().to_string();
+        let mesh = raytracer::geometry::ply::parse_ply(&bytes, &name);
+        if name.contains("/seeds/") {
+            assert!(mesh.is_ok(), "a seed must read: {mesh:?}");
+        }
+        if let Ok(mesh) = mesh {
+            check_mesh(&mesh, &name);
+        }
+    }
+}
+
+#[test]
+fn serialized_mesh_inputs() {
+    for (path, bytes) in inputs("serialized_mesh") {
+        let name = path.display().to_string();
+        for shape_index in 0..2 {
+            let mesh = raytracer::geometry::serialized::parse_serialized(&bytes, &name, shape_index);
+            if name.contains("/seeds/") {
+                assert!(mesh.is_ok(), "a seed's meshes must read: {mesh:?}");
+            }
+            if let Ok(mesh) = mesh {
+                check_mesh(&mesh, &name);
+            }
+        }
+    }
+}
+
 #[test]
 fn texture_decoder_inputs() {
     for (path, bytes) in inputs("texture_decoder") {

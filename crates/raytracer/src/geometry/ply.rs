@@ -315,4 +315,37 @@ property uchar red\nelement face 1\nproperty list uchar uint vertex_indices\nend
         assert_eq!(parse_ply(negative.as_bytes(), "q.ply").expect_err("negative").element, "face 0");
         assert_eq!(parse_ply(b"not a ply", "x.ply").expect_err("header").element, "header");
     }
+
+    mod no_panics {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(512))]
+
+            /// The test files with bytes changed, cut or repeated: an error or a mesh with its
+            /// indices in range, never a panic.
+            #[test]
+            fn changed_files_never_panic(
+                which in 0..3usize,
+                changes in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..6),
+                cut in any::<prop::sample::Index>(),
+            ) {
+                let mut bytes = match which {
+                    0 => ASCII.as_bytes().to_vec(),
+                    1 => binary(false),
+                    _ => binary(true),
+                };
+                for (at, b) in changes {
+                    let i = at.index(bytes.len());
+                    bytes[i] = b;
+                }
+                bytes.truncate(cut.index(bytes.len() + 1));
+                if let Ok(mesh) = parse_ply(&bytes, "p.ply") {
+                    let n = mesh.positions.len();
+                    prop_assert!(mesh.triangles.iter().all(|t| t.iter().all(|&i| (i as usize) < n)));
+                }
+            }
+        }
+    }
 }

@@ -366,4 +366,33 @@ mod tests {
         v5[2] = 5;
         assert!(parse_serialized(&v5, "q", 0).expect_err("v5").to_string().contains("unsupported version 5"));
     }
+
+    mod no_panics {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(512))]
+
+            /// A file of two meshes with bytes changed and cut: an error or a mesh with its
+            /// indices in range, never a panic.
+            #[test]
+            fn changed_files_never_panic(
+                changes in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..6),
+                cut in any::<prop::sample::Index>(),
+                shape_index in 0..3u32,
+            ) {
+                let mut bytes = two_meshes();
+                for (at, b) in changes {
+                    let i = at.index(bytes.len());
+                    bytes[i] = b;
+                }
+                bytes.truncate(cut.index(bytes.len() + 1));
+                if let Ok(mesh) = parse_serialized(&bytes, "s", shape_index) {
+                    let n = mesh.positions.len();
+                    prop_assert!(mesh.triangles.iter().all(|t| t.iter().all(|&i| (i as usize) < n)));
+                }
+            }
+        }
+    }
 }
