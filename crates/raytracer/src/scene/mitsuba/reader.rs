@@ -231,7 +231,9 @@ impl Reader {
         let text = self.files[index as usize].text().to_owned();
         let doc = self.parse_xml(index, &text)?;
         let root = doc.root_element();
-        let mut ctx = FileCtx { index, upgrade: false, dir: dir.clone(), resolver: vec![dir], chain };
+        // Text without a folder resolves nothing relative (not against the current directory).
+        let resolver = if dir.as_os_str().is_empty() { Vec::new() } else { vec![dir.clone()] };
+        let mut ctx = FileCtx { index, upgrade: false, dir, resolver, chain };
         let version = self.file_version(&mut ctx, root)?;
         if PluginKind::from_tag(root.tag_name().name()).is_none() && !is_typed_spectrum(root) {
             let at = self.element_pos(index, root);
@@ -619,19 +621,22 @@ impl Reader {
                 }
                 let Some(value) = attrs.get("value") else { return Ok(()) };
                 let folder = Path::new(&value.value);
-                let mut resolved =
-                    if folder.is_absolute() { folder.to_path_buf() } else { ctx.dir.join(folder) };
-                if !resolved.exists()
-                    && let Some(found) = resolve(&ctx.resolver, &value.value)
-                {
-                    resolved = found;
+                let mut resolved = if folder.is_absolute() {
+                    Some(folder.to_path_buf())
+                } else if ctx.dir.as_os_str().is_empty() {
+                    None
+                } else {
+                    Some(ctx.dir.join(folder))
+                };
+                if !resolved.as_ref().is_some_and(|r| r.exists()) {
+                    resolved = resolve(&ctx.resolver, &value.value);
                 }
-                if !resolved.is_dir() {
+                let Some(resolved) = resolved.filter(|r| r.is_dir()) else {
                     return Err(MitsubaError::PathNotFound {
                         at: self.location(value.pos),
                         folder: value.value.clone(),
                     });
-                }
+                };
                 ctx.resolver.insert(0, resolved);
             }
             "include" => {
@@ -955,7 +960,9 @@ impl Reader {
         let Some(filename) = attrs.get("filename") else { return Ok(()) };
         // Mitsuba: the resolver of the including file, its folder first.
         let mut resolver = ctx.resolver.clone();
-        resolver.insert(0, ctx.dir.clone());
+        if !ctx.dir.as_os_str().is_empty() {
+            resolver.insert(0, ctx.dir.clone());
+        }
         let Some(path) = resolve(&resolver, &filename.value) else {
             return Err(MitsubaError::IncludeNotFound {
                 at: self.location(filename.pos),

@@ -552,6 +552,22 @@ fn search_folders_resolve_includes_spectra_and_plugin_files() {
 }
 
 #[test]
+fn text_without_a_folder_resolves_nothing_relative() {
+    // The tests run in crates/raytracer, which has a Cargo.toml: not found all the same.
+    assert!(Path::new("Cargo.toml").exists());
+    let e = error_at(read(&scene("<include filename=\"Cargo.toml\"/>")), "s.xml:2:20");
+    assert!(matches!(e, MitsubaError::IncludeNotFound { .. }), "{e}");
+    error_at(read(&scene("<path value=\"src\"/>")), "s.xml:2:14");
+    let e = error_at(
+        read(&scene("<bsdf type=\"c\"><spectrum name=\"eta\" filename=\"Cargo.toml\"/></bsdf>")),
+        "s.xml:2:47",
+    );
+    assert!(e.to_string().ends_with("file not found"), "{e}");
+    let doc = read(&scene("")).expect("reads");
+    assert!(doc.resolver.is_empty() && doc.resolve_file("Cargo.toml").is_none());
+}
+
+#[test]
 fn positions_count_characters_and_tabs_as_one_column() {
     let e = read("<scene version=\"3.0.0\">\n\t<!-- é -->\t<bsdf type=\"x\"><float name=\"é\" value=\"?\"/></bsdf>\n</scene>")
         .expect_err("bad number");
