@@ -3,9 +3,13 @@
 //! plausible plugin counts. When the data is absent the tests are skipped with a loud message,
 //! except under CI, where they fail.
 
-use std::path::{Path, PathBuf};
+mod support;
 
-use raytracer::scene::mitsuba::{self, Document, Node, PluginKind, Value};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use raytracer::scene::mitsuba::{self, Document, MitsubaError, Node, PluginKind, Value};
 
 /// `../shared/mitsuba-data` beside the repository (or under `$RAYTERRA_SHARED`, for a checkout
 /// elsewhere, such as a git worktree), or `None` (skipped, loudly) without it.
@@ -50,13 +54,19 @@ fn is_fragment(path: &Path) -> bool {
     matches!(parent, Some("fragments" | "include"))
 }
 
-#[test]
-fn every_scene_of_the_mitsuba_data_reads() {
-    let Some(data) = mitsuba_data() else { return };
+/// Every `.xml` file of the data's scenes.
+fn all_scene_files(data: &Path) -> Vec<PathBuf> {
     let mut files = Vec::new();
     for dir in ["scenes/cbox", "scenes/matpreview", "docs/scenes"] {
         xml_files(&data.join(dir), &mut files);
     }
+    files
+}
+
+#[test]
+fn every_scene_of_the_mitsuba_data_reads() {
+    let Some(data) = mitsuba_data() else { return };
+    let files = all_scene_files(&data);
     assert!(files.len() >= 100, "expected the published scenes, found {}", files.len());
     let mut failures = Vec::new();
     let mut read = 0;
@@ -152,4 +162,118 @@ fn defines_override_defaults_in_the_documentation_scenes() {
     let mesh = doc.plugins().find(|p| p.type_name == "serialized").expect("the serialized mesh");
     let Some(Value::String(name)) = mesh.property("filename").map(|p| &p.value) else { panic!("{mesh:?}") };
     assert!(doc.resolve_file(name).is_some_and(|p| p.is_file()), "{name}");
+}
+
+/// What Mitsuba's parser read from one file (see `tools/mitsuba/parse_scenes.py`).
+#[derive(Default)]
+struct Parsed {
+    error: Option<String>,
+    counts: BTreeMap<String, usize>,
+    matrices: Vec<(String, Vec<f64>)>,
+}
+
+/// Mitsuba's name of a plugin kind.
+fn mitsuba_type(kind: PluginKind) -> &'static str {
+    match kind {
+        PluginKind::Scene => "Scene",
+        PluginKind::Bsdf => "BSDF",
+        PluginKind::Texture => "Texture",
+        PluginKind::Emitter => "Emitter",
+        PluginKind::Shape => "Shape",
+        PluginKind::Sensor => "Sensor",
+        PluginKind::Film => "Film",
+        PluginKind::ReconstructionFilter => "ReconstructionFilter",
+        PluginKind::Sampler => "Sampler",
+        PluginKind::Integrator => "Integrator",
+        PluginKind::Medium => "Medium",
+        PluginKind::Phase => "PhaseFunction",
+        PluginKind::Volume => "Volume",
+    }
+}
+
+/// Every scene file of the data, read by our reader and by Mitsuba 3's own parser
+/// (`mitsuba.parser.parse_file`): the same number of plugins of each kind, and the same
+/// `to_world` and `to_uv` matrices in the same order (Mitsuba's nodes are in file order with
+/// includes in place, as our preorder). Mitsuba's parser does not resolve references, so a
+/// fragment that names ids of its including scene reads there and fails here.
+#[test]
+fn the_reader_agrees_with_mitsubas_own_parser() {
+    let Some(data) = mitsuba_data() else { return };
+    let Some(python) = support::pbr::mitsuba_python() else { return };
+    let mut docs = Vec::new();
+    let mut args = Vec::new();
+    for path in all_scene_files(&data) {
+        let mut defines = Vec::new();
+        let mut doc = mitsuba::read_file(&path, &defines);
+        if matches!(&doc, Err(MitsubaError::UndefinedParameter { .. })) {
+            defines.push(("spp".to_owned(), "4".to_owned()));
+            doc = mitsuba::read_file(&path, &defines);
+        }
+        let define_arg: Vec<String> = defines.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        args.push(format!("{}::{}", path.display(), define_arg.join(",")));
+        docs.push((path, doc));
+    }
+    let script = support::workspace().join("tools/mitsuba/parse_scenes.py");
+    let output = Command::new(&python).arg(&script).args(&args).output().expect("runs Mitsuba's parser");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let mut theirs: HashMap<String, Parsed> = HashMap::new();
+    let mut current = String::new();
+    for line in String::from_utf8_lossy(&output.stdout).lines() {
+        let fields: Vec<&str> = line.split('\t').collect();
+        match fields[..] {
+            ["FILE", path] => {
+                current = path.to_owned();
+                theirs.insert(current.clone(), Parsed::default());
+            }
+            ["ERROR", message] => theirs.get_mut(&current).expect("a file").error = Some(message.to_owned()),
+            ["COUNT", kind, n] => {
+                theirs
+                    .get_mut(&current)
+                    .expect("a file")
+                    .counts
+                    .insert(kind.to_owned(), n.parse().expect("count"));
+            }
+            ["MATRIX", name, values] => {
+                let values = values.split(' ').map(|v| v.parse().expect("number")).collect();
+                theirs.get_mut(&current).expect("a file").matrices.push((name.to_owned(), values));
+            }
+            _ => panic!("unexpected line from the parser script: {line}"),
+        }
+    }
+    let (mut compared, mut matrices) = (0, 0);
+    for (path, doc) in &docs {
+        let key = path.display().to_string();
+        let parsed = theirs.get(&key).unwrap_or_else(|| panic!("no result for {key}"));
+        let doc = match (doc, &parsed.error) {
+            (Ok(doc), None) => doc,
+            (Err(MitsubaError::UnknownId { .. }), None) if is_fragment(path) => continue,
+            (Err(_), Some(_)) => continue,
+            (ours, theirs) => panic!("{key}: we read {:?}, Mitsuba {theirs:?}", ours.as_ref().err()),
+        };
+        let mut counts = BTreeMap::new();
+        for p in doc.plugins() {
+            *counts.entry(mitsuba_type(p.kind).to_owned()).or_insert(0) += 1;
+        }
+        assert_eq!(counts, parsed.counts, "{key}: plugins of each kind");
+        let ours: Vec<(String, Vec<f64>)> = doc
+            .plugins()
+            .flat_map(|p| p.properties.iter())
+            .filter(|p| p.name == "to_world" || p.name == "to_uv")
+            .filter_map(|p| match &p.value {
+                Value::Transform(m) => Some((p.name.clone(), m.transpose().to_cols_array().to_vec())),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(ours.len(), parsed.matrices.len(), "{key}: transforms");
+        for ((name, a), (their_name, b)) in ours.iter().zip(&parsed.matrices) {
+            assert_eq!(name, their_name, "{key}");
+            // Mitsuba rounds some steps (its rotations) through single precision.
+            let close = a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-7 * y.abs().max(1.0));
+            assert!(close, "{key}: {name}\nours:    {a:?}\nMitsuba: {b:?}");
+            matrices += 1;
+        }
+        compared += 1;
+    }
+    eprintln!("{compared} scene files and {matrices} transforms agree with Mitsuba's parser");
+    assert!(compared >= 100 && matrices >= 500, "{compared} files, {matrices} transforms compared");
 }
