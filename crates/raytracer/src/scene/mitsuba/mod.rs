@@ -134,6 +134,12 @@ impl Document {
         }
     }
 
+    /// The plugins `plugin` holds, in file order, references followed: each child with the
+    /// plugin it stands for.
+    pub fn children<'a>(&'a self, plugin: &'a Plugin) -> impl Iterator<Item = (&'a Child, &'a Plugin)> {
+        plugin.children.iter().filter_map(move |c| Some((c, self.target(c)?)))
+    }
+
     /// Every plugin declared in the scene, the root first, depth first in file order (each
     /// once, however often it is referenced).
     pub fn plugins(&self) -> impl Iterator<Item = &Plugin> {

@@ -304,6 +304,10 @@ fn references_aliases_and_their_errors() {
     .expect("reads");
     let shape = first(&doc, PluginKind::Shape);
     assert_eq!(shape.children[0].name.as_deref(), Some("bsdf"));
+    assert_eq!(shape.child("bsdf").map(|c| c.pos.span.line), Some(2));
+    let resolved: Vec<_> =
+        doc.children(shape).map(|(c, p)| (c.name.as_deref(), p.type_name.as_str())).collect();
+    assert_eq!(resolved, [(Some("bsdf"), "diffuse")]);
     assert_eq!(doc.target(&shape.children[0]).map(|p| p.type_name.as_str()), Some("diffuse"));
     assert_eq!(doc.get("other").map(|p| p.id.as_deref()), Some(Some("later")));
     let e = error_at(read(&scene("<shape type=\"obj\">\n    <ref id=\"nowhere\"/></shape>")), "s.xml:3:5");

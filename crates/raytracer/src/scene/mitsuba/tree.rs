@@ -113,6 +113,11 @@ impl Plugin {
         self.properties.iter().find(|p| p.name == name)
     }
 
+    /// The nested plugin or reference that fills the parameter `name`, if any.
+    pub fn child(&self, name: &str) -> Option<&Child> {
+        self.children.iter().find(|c| c.name.as_deref() == Some(name))
+    }
+
     /// The nested plugins and references, with inline plugins only (references skipped).
     pub fn inline_children(&self) -> impl Iterator<Item = &Plugin> {
         self.children.iter().filter_map(|c| match &c.node {
