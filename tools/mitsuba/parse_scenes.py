@@ -20,6 +20,8 @@ import sys
 import mitsuba as mi
 
 mi.set_variant("scalar_rgb")
+# Warnings go to standard output, where the results are.
+mi.set_log_level(mi.LogLevel.Error)
 config = mi.parser.ParserConfig("scalar_rgb")
 
 for arg in sys.argv[1:]:

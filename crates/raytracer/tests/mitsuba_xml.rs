@@ -277,3 +277,43 @@ fn the_reader_agrees_with_mitsubas_own_parser() {
     eprintln!("{compared} scene files and {matrices} transforms agree with Mitsuba's parser");
     assert!(compared >= 100 && matrices >= 500, "{compared} files, {matrices} transforms compared");
 }
+
+/// Every spectrum file of the data (`ior/*.spd`), reduced to RGB by our reader and by Mitsuba
+/// 3.9.1's `scalar_rgb` variant (`tools/mitsuba/spectra.py`) as a reflectance, as a conductor's
+/// `eta` and as emitted radiance: the same colours to single precision.
+#[test]
+fn spectrum_files_reduce_to_the_colours_mitsuba_gives_them() {
+    use raytracer::scene::mitsuba::{Spectrum, SpectrumUse};
+    let Some(data) = mitsuba_data() else { return };
+    let Some(python) = support::pbr::mitsuba_python() else { return };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(data.join("ior"))
+        .expect("list")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "spd"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 100, "{} spectrum files", files.len());
+    let script = support::workspace().join("tools/mitsuba/spectra.py");
+    let output = Command::new(&python).arg(&script).args(&files).output().expect("runs Mitsuba");
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let mut compared = 0;
+    for line in String::from_utf8_lossy(&output.stdout).lines() {
+        let fields: Vec<&str> = line.split('\t').collect();
+        let [usage, path, rgb] = fields[..] else { panic!("unexpected line: {line}") };
+        let theirs: Vec<f64> = rgb.split(' ').map(|v| v.parse().expect("number")).collect();
+        let usage = match usage {
+            "bounded" => SpectrumUse::Bounded,
+            "unbounded" => SpectrumUse::Unbounded,
+            "emission" => SpectrumUse::Emission,
+            other => panic!("unknown use {other}"),
+        };
+        let text = std::fs::read_to_string(path).expect("readable");
+        let spectrum = Spectrum::parse_spd(&text).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let ours = spectrum.to_srgb(usage);
+        let close = (0..3).all(|i| (ours[i] - theirs[i]).abs() <= 2e-5 * theirs[i].abs().max(1.0));
+        assert!(close, "{path} as {usage:?}: ours {ours}, Mitsuba {theirs:?}");
+        compared += 1;
+    }
+    assert_eq!(compared, 3 * files.len());
+    eprintln!("{compared} spectrum reductions agree with Mitsuba's");
+}
