@@ -258,7 +258,7 @@ impl Reader {
         };
         roxmltree::Document::parse_with_options(text, options).map_err(|e| {
             let p = e.pos();
-            let span = Span { line: p.row, column: p.col, len: 1 };
+            let span = Span { line: p.row.max(1), column: p.col.max(1), len: 1 };
             // roxmltree's message ends with its own ` at line:column`, which the place shows.
             let message = e.to_string();
             let message = match message.rsplit_once(" at ") {
