@@ -976,7 +976,8 @@ impl Reader {
             names.push(&name);
             return Err(MitsubaError::RecursiveInclude { at: self.location(pos), chain: names.join(" -> ") });
         }
-        if ctx.chain.len() >= MAX_INCLUDE_DEPTH {
+        // The chain holds the first file and each include below it.
+        if ctx.chain.len() > MAX_INCLUDE_DEPTH {
             return Err(MitsubaError::Limit {
                 at: self.location(pos),
                 message: format!("includes nested more than {MAX_INCLUDE_DEPTH} deep"),

@@ -511,6 +511,28 @@ fn include_errors_name_the_include() {
 
 #[test]
 fn include_chains_are_bounded() {
+    // MAX_INCLUDE_DEPTH includes nested read; one more is refused.
+    let chain = |levels: usize| -> Vec<(String, String)> {
+        let mut files: Vec<(String, String)> = (0..levels)
+            .map(|i| (format!("f{i}.xml"), scene(&format!("<include filename=\"f{}.xml\"/>", i + 1))))
+            .collect();
+        files.push((format!("f{levels}.xml"), scene("<shape type=\"sphere\"/>")));
+        files
+    };
+    let files = chain(MAX_INCLUDE_DEPTH);
+    let refs: Vec<(&str, &str)> = files.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
+    let dir = folder(&refs);
+    let doc = read_file(&dir.path().join("f0.xml"), &[]).expect("15 includes deep");
+    assert_eq!(doc.files.len(), MAX_INCLUDE_DEPTH + 1);
+    let files = chain(MAX_INCLUDE_DEPTH + 1);
+    let refs: Vec<(&str, &str)> = files.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
+    let dir = folder(&refs);
+    let e = read_file(&dir.path().join("f0.xml"), &[]).expect_err("too deep");
+    assert!(matches!(e, MitsubaError::Limit { .. }), "{e}");
+}
+
+#[test]
+fn include_chains_far_too_deep_are_refused() {
     let mut files: Vec<(String, String)> = (0..MAX_INCLUDE_DEPTH + 2)
         .map(|i| (format!("f{i}.xml"), scene(&format!("<include filename=\"f{}.xml\"/>", i + 1))))
         .collect();
