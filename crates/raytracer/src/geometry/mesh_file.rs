@@ -21,7 +21,9 @@ pub struct MeshData {
     /// Triangles as indices into the vertices, each checked to be in range; a polygon of the
     /// file is split into a fan of triangles around its first corner.
     pub triangles: Vec<[u32; 3]>,
-    /// Whether the file asks for flat shading (`serialized`'s face-normals flag).
+    /// Whether the file's flags ask for flat shading (`serialized`'s face-normals flag).
+    /// Mitsuba 3 ignores the flag (the shape's `face_normals` parameter decides); it is kept
+    /// for information.
     pub face_normals: bool,
 }
 
