@@ -53,6 +53,68 @@ fn scene_parser_inputs() {
 }
 
 #[test]
+fn mitsuba_xml_inputs() {
+    use raytracer::scene::mitsuba;
+    for (path, bytes) in inputs("mitsuba_xml") {
+        // As the fuzz target does: the text without a folder, `spp` defined.
+        let source = SourceFile::from_bytes(path.display().to_string(), None, bytes.as_slice());
+        let defines = [("spp".to_owned(), "4".to_owned())];
+        let read = mitsuba::read_source(source, &defines);
+        let name = path.to_string_lossy();
+        if name.contains("/seeds/") {
+            // The seeds that show errors fail; the others read.
+            assert_eq!(read.is_err(), name.contains("errors"), "{name}: {read:?}");
+        }
+        match read {
+            Ok(doc) => {
+                for plugin in doc.plugins() {
+                    assert!(plugin.children.iter().all(|c| doc.target(c).is_some()), "{name}");
+                }
+            }
+            Err(error) => drop(error.diagnostic().to_string()),
+        }
+    }
+}
+
+/// As the mesh fuzz targets check: indices in range, attributes as long as the positions.
+fn check_mesh(mesh: &raytracer::geometry::mesh_file::MeshData, name: &str) {
+    let n = mesh.positions.len();
+    assert!(mesh.triangles.iter().all(|t| t.iter().all(|&i| (i as usize) < n)), "{name}");
+    assert!(mesh.normals.as_ref().is_none_or(|v| v.len() == n), "{name}");
+    assert!(mesh.uvs.as_ref().is_none_or(|v| v.len() == n), "{name}");
+}
+
+#[test]
+fn ply_mesh_inputs() {
+    for (path, bytes) in inputs("ply_mesh") {
+        let name = path.display().to_string();
+        let mesh = raytracer::geometry::ply::parse_ply(&bytes, &name);
+        if name.contains("/seeds/") {
+            assert!(mesh.is_ok(), "a seed must read: {mesh:?}");
+        }
+        if let Ok(mesh) = mesh {
+            check_mesh(&mesh, &name);
+        }
+    }
+}
+
+#[test]
+fn serialized_mesh_inputs() {
+    for (path, bytes) in inputs("serialized_mesh") {
+        let name = path.display().to_string();
+        for shape_index in 0..2 {
+            let mesh = raytracer::geometry::serialized::parse_serialized(&bytes, &name, shape_index);
+            if name.contains("/seeds/") {
+                assert!(mesh.is_ok(), "a seed's meshes must read: {mesh:?}");
+            }
+            if let Ok(mesh) = mesh {
+                check_mesh(&mesh, &name);
+            }
+        }
+    }
+}
+
+#[test]
 fn texture_decoder_inputs() {
     for (path, bytes) in inputs("texture_decoder") {
         let budget = MemoryBudget::new(256 << 20);

@@ -20,6 +20,7 @@ const RAYTRACER_TIERS: &[(&str, u32)] = &[
     ("material", 2),
     ("light", 2),
     ("scene::course", 3),
+    ("scene::mitsuba", 3),
     ("texture", 4),
     ("procedural", 4),
     ("camera", 4),

@@ -240,7 +240,7 @@ impl Default for ViewSettings {
     /// The course's start ([`crate::SceneConfig`]'s `camera_start`), a field of view of 45
     /// degrees and time 0: what `--screenshot` draws without a view.
     fn default() -> Self {
-        let start = crate::SceneConfig::default().camera_start;
+        let start = crate::config::SceneConfig::default().camera_start;
         Self {
             position: start.position.to_array(),
             yaw_degrees: start.yaw_degrees,

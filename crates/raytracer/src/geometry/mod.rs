@@ -12,8 +12,11 @@
 pub mod bezier;
 mod cylinder;
 pub mod mesh;
+pub mod mesh_file;
 pub mod obj;
 mod plane;
+pub mod ply;
+pub mod serialized;
 mod sphere;
 mod square;
 pub mod triangle;

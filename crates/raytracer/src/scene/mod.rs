@@ -4,6 +4,7 @@
 //! [0, 1], light colours may exceed 1).
 
 pub mod course;
+pub mod mitsuba;
 pub mod texture;
 
 pub use crate::base::diagnostic::{Diagnostic, Location, Severity};
