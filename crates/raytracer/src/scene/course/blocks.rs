@@ -6,8 +6,8 @@ use std::fmt;
 use std::sync::Arc;
 
 use super::super::{PhotonSettings, Scene};
-use super::lexer::*;
-use super::*;
+use super::lexer::{Token, char_count, tokenize};
+use super::{MAX_KEPT_DIAGNOSTICS, Omitted, parser_has_errors};
 use crate::base::diagnostic::{Diagnostic, Severity};
 use crate::base::source::{SourceFile, Span, numbered_lines};
 use crate::material::Material;

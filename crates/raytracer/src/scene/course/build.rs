@@ -6,9 +6,12 @@ use glam::{DVec2, DVec3};
 use super::super::{
     Algorithm, Background, CameraSettings, Gradient, MeshPrimitive, PhotonSettings, Primitive,
 };
-use super::blocks::*;
-use super::keys::*;
-use super::*;
+use super::blocks::{BlockKind, Entry, LightKind, OpenBlock, Parser, PrimitiveKind};
+use super::keys::{BlockReader, Lookup, Reported};
+use super::{
+    MAX_EMITTED_PHOTONS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_QUALITY, MAX_SAMPLE_PHOTONS, MAX_STORED_PHOTONS,
+    aspect_mismatch, check_image_size,
+};
 use crate::base::diagnostic::Severity;
 use crate::base::source::Span;
 use crate::geometry::{Bezier, Cylinder, MeshFile, MeshTransform, Plane, Shape, Sphere, Square, Triangle};

@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use super::blocks::*;
+use super::blocks::{BEZIER_POINT_KEY, BlockKind, Entry, OpenBlock, Parser, PrimitiveKind, known_keys};
 use crate::base::diagnostic::Diagnostic;
 use crate::base::error::GeometryError;
 use crate::base::source::Span;

@@ -25,9 +25,8 @@ use std::fmt;
 use super::{Background, CameraSettings, Scene};
 use crate::base::diagnostic::Diagnostic;
 use crate::base::source::SourceFile;
-
-use blocks::*;
-use pieces::*;
+use blocks::Parser;
+use pieces::parse_in_pieces;
 
 /// Largest image side accepted, in pixels.
 pub const MAX_IMAGE_SIDE: u32 = 32_768;

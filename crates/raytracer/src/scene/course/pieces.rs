@@ -3,9 +3,9 @@
 //! otherwise the file is parsed line by line for its diagnostics).
 
 use super::super::{MeshPrimitive, Scene};
-use super::blocks::*;
-use super::lexer::*;
-use super::*;
+use super::blocks::{Parser, State, is_block_keyword};
+use super::lexer::tokenize;
+use super::{Omitted, Parsed};
 use crate::base::source::{SourceFile, count_line_ends};
 
 /// Files of at least twice this many bytes are parsed in pieces of about this many bytes, in

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use glam::{DVec2, DVec3};
 
+use super::pieces::pieces;
 use super::*;
 use crate::geometry::Shape;
 use crate::light::Light;
