@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use super::*;
+use super::{NO_TEXTURE, PreparedScene};
 use crate::geometry::{Ray, Shape, ShapeHit, ShapePart, offset_origin};
 use crate::texture::Texture;
 

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::*;
+use super::TextureSearch;
 use crate::base::memory::MemoryBudget;
 use crate::geometry::obj::{LoadedObj, ObjError, load_obj};
 use crate::geometry::{MeshFile, Shape, TriangleMesh};

@@ -1,7 +1,7 @@
 //! The ray queries every integrator uses: the nearest hit, and whether a shadow ray is blocked,
 //! through the BVH and the loops of primitives too few or unbounded to go in it.
 
-use super::*;
+use super::{Hit, PreparedScene};
 use crate::accel::BoxRay;
 use crate::geometry::{Cylinder, Plane, Ray, Shape, ShapeHit, Sphere, Square};
 use crate::material::Material;
