@@ -8,7 +8,7 @@ use std::sync::Arc;
 use super::super::{PhotonSettings, Scene};
 use super::lexer::*;
 use super::*;
-use crate::base::diagnostic::{Diagnostic, Severity};
+use crate::base::diagnostic::{Diagnostic, Severity, clip};
 use crate::base::source::{SourceFile, Span, numbered_lines};
 use crate::material::Material;
 
@@ -382,7 +382,7 @@ impl<'s> Parser<'s> {
         {
             self.diagnostics.push(Diagnostic::general(
                 Severity::Warning,
-                format!("`{}` describes no lights and no primitives", self.source.name()),
+                format!("`{}` describes no lights and no primitives", clip(self.source.name())),
             ));
         }
     }
@@ -408,7 +408,7 @@ impl<'s> Parser<'s> {
                     } else {
                         PRIMITIVE_TYPES
                     };
-                    self.error(span, format!("`{}` needs a type: {choices}", first.text));
+                    self.error(span, format!("`{}` needs a type: {choices}", clip(first.text)));
                     return State::Skipping(span);
                 };
                 let ty_span = ty.span(line);
@@ -429,10 +429,15 @@ impl<'s> Parser<'s> {
                         let message = if first.text != "light" && IGNORED_PRIMITIVES.contains(&ty.text) {
                             format!(
                                 "`{} {}` is not part of the scene language (the renderers that read it ignored it too); the block is skipped",
-                                first.text, ty.text
+                                clip(first.text),
+                                clip(ty.text)
                             )
                         } else {
-                            format!("unknown {} type `{}`; the block is skipped", first.text, ty.text)
+                            format!(
+                                "unknown {} type `{}`; the block is skipped",
+                                clip(first.text),
+                                clip(ty.text)
+                            )
                         };
                         self.warning(ty_span, message);
                         State::Skipping(ty_span)
@@ -444,11 +449,14 @@ impl<'s> Parser<'s> {
                 State::TopLevel
             }
             text if text.contains('=') => {
-                self.warning(span, format!("`{}` is outside any block; the line is ignored", text));
+                self.warning(span, format!("`{}` is outside any block; the line is ignored", clip(text)));
                 State::TopLevel
             }
             text => {
-                self.warning(span, format!("unknown block `{text}`; its lines up to `end` are skipped"));
+                self.warning(
+                    span,
+                    format!("unknown block `{}`; its lines up to `end` are skipped", clip(text)),
+                );
                 State::Skipping(span)
             }
         }
@@ -470,17 +478,17 @@ impl<'s> Parser<'s> {
                 Some(second) if second.text.starts_with('=') => {
                     self.warning(
                         Span { line, column: first.column, len: second.column + 1 - first.column },
-                        format!("write `{}=` with no space before `=`", first.text),
+                        format!("write `{}=` with no space before `=`", clip(first.text)),
                     );
                     (first.text, first.len, &second.text[1..], &tokens[2..])
                 }
                 _ => {
-                    self.error(first.span(line), format!("expected `key= value`, found `{}`", first.text))
-                        .notes
-                        .push(format!(
-                            "inside the `{}` block opened at line {}",
-                            block.kind, block.header.line
-                        ));
+                    self.error(
+                        first.span(line),
+                        format!("expected `key= value`, found `{}`", clip(first.text)),
+                    )
+                    .notes
+                    .push(format!("inside the `{}` block opened at line {}", block.kind, block.header.line));
                     return;
                 }
             },
@@ -515,7 +523,7 @@ impl<'s> Parser<'s> {
                 let earlier = block.entries[previous].key_span.line;
                 self.warning(
                     key_span,
-                    format!("`{key}=` is given again; this value replaces the one on line {earlier}"),
+                    format!("`{}=` is given again; this value replaces the one on line {earlier}", clip(key)),
                 );
                 block.entries[previous] = entry;
             }

@@ -9,7 +9,7 @@ use super::super::{
 use super::blocks::*;
 use super::keys::*;
 use super::*;
-use crate::base::diagnostic::Severity;
+use crate::base::diagnostic::{Severity, clip};
 use crate::base::source::Span;
 use crate::geometry::{Bezier, Cylinder, MeshFile, MeshTransform, Plane, Shape, Sphere, Square, Triangle};
 use crate::light::Light;
@@ -111,7 +111,7 @@ impl<'p, 's> BlockReader<'p, 's> {
                 Some(a) => cam.algorithm = Some((a, self.parser.source.location(span))),
                 None => {
                     let expected = Algorithm::NAMES.map(|n| format!("`{n}`")).join(", ");
-                    self.error(span, format!("unknown `algorithm=` `{name}`"))
+                    self.error(span, format!("unknown `algorithm=` `{}`", clip(&name)))
                         .notes
                         .push(format!("expected one of {expected}"));
                 }
@@ -254,7 +254,7 @@ impl<'p, 's> BlockReader<'p, 's> {
         {
             self.warning(
                 span,
-                format!("unknown `blur= {blur}`; `exp` is the only distribution, and it is used"),
+                format!("unknown `blur= {}`; `exp` is the only distribution, and it is used", clip(&blur)),
             );
         }
         m.texture = self.texture_ref("texture");
@@ -491,7 +491,10 @@ impl<'p, 's> BlockReader<'p, 's> {
                 match text.parse::<f64>() {
                     Ok(v) if v.is_finite() => values.push(v),
                     _ => {
-                        self.error(*span, format!("`P=` expects 2 numbers (z r); `{text}` is not a number"));
+                        self.error(
+                            *span,
+                            format!("`P=` expects 2 numbers (z r); `{}` is not a number", clip(text)),
+                        );
                         bad = true;
                     }
                 }

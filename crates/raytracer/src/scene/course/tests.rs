@@ -965,3 +965,29 @@ fn large_files_with_problems_are_reported_as_line_by_line() {
         assert_eq!(from_parse, expected, "{extra}");
     }
 }
+
+#[test]
+fn quoted_tokens_are_cut_in_messages() {
+    // A line of one huge token (a file of NULs is one): every message quotes at most
+    // MAX_QUOTED_CHARS characters of it, and the location keeps a bounded part of the line.
+    let token = "\0".repeat(1 << 20);
+    let text = format!(
+        "{token}\n{SPHERE}primitive {token}\nend\nprimitive sphere\n O= {token} 0 0\n R= 1\n {token}= 1\nend\n"
+    );
+    let error = parse(&source(&text)).expect_err("errors");
+    let limit = crate::base::diagnostic::MAX_QUOTED_CHARS;
+    for d in &error.diagnostics {
+        assert!(d.message.len() < 3 * limit + 200, "{} bytes: {:.200}", d.message.len(), d.message);
+        let kept = d.location.as_ref().map_or(0, |l| l.line_text.len());
+        assert!(kept <= crate::base::diagnostic::MAX_KEPT_LINE_CHARS, "{kept}");
+    }
+    let messages: Vec<&str> = error.diagnostics.iter().map(|d| d.message.as_str()).collect();
+    let cut = format!("`{}...`", "\0".repeat(limit));
+    assert!(messages[0].starts_with(&format!("unknown block {cut}")), "{:?}", &messages[0][..80]);
+    assert!(messages.iter().any(|m| m.starts_with(&format!("unknown primitive type {cut}"))), "{messages:?}");
+    assert!(messages.iter().any(|m| m.contains(&format!("; {cut} is not a number"))), "{messages:?}");
+    assert!(messages.iter().any(|m| m.starts_with(&format!("unknown key `{}...=`", "\0".repeat(limit)))));
+    // Printed, the whole report stays small.
+    let printed = error.to_string();
+    assert!(printed.len() < 20_000, "{} bytes", printed.len());
+}
