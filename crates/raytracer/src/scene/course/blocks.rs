@@ -97,6 +97,12 @@ pub(super) const PRIMITIVE_TYPES: &str =
 /// (spec section 9): skipped with a warning that says so.
 pub(super) const IGNORED_PRIMITIVES: [&str; 2] = ["torus", "cube"];
 
+/// Primitive types of LuChengTHU's renderer of the course that are other names of ours: its
+/// normal-mapped sphere and plane (`NT=` the normal map; spelled so), read as `sphere` and `plane`
+/// with a note.
+pub(super) const ALIAS_PRIMITIVES: [(&str, PrimitiveKind); 2] =
+    [("NomalBall", PrimitiveKind::Sphere), ("NomalPlane", PrimitiveKind::Plane)];
+
 /// The key a `primitive bezier` block repeats, one control point a line (`P= z r`).
 pub(super) const BEZIER_POINT_KEY: &str = "P";
 
@@ -419,6 +425,24 @@ impl<'s> Parser<'s> {
                     // `obj` is another name of `primitive` (spec section 9).
                     ("primitive" | "obj", ty) => PrimitiveKind::from_name(ty).map(BlockKind::Primitive),
                     _ => None,
+                };
+                let alias =
+                    ALIAS_PRIMITIVES.iter().find(|(name, _)| first.text != "light" && *name == ty.text);
+                let kind = match (kind, alias) {
+                    (None, Some(&(name, alias))) => {
+                        self.report(
+                            Severity::Note,
+                            ty_span,
+                            format!("`{} {name}` is read as `primitive {}`", first.text, alias.name()),
+                        )
+                        .notes
+                        .push(format!(
+                            "`{name}` is another name of `{}` with its normal map `NT=` (LuChengTHU's renderer)",
+                            alias.name()
+                        ));
+                        Some(BlockKind::Primitive(alias))
+                    }
+                    (kind, _) => kind,
                 };
                 match kind {
                     Some(kind) => {
