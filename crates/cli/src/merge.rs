@@ -1,7 +1,7 @@
 //! `rayterra merge`: assembles the part files of a render split with `--tile` and `--pass` into
 //! the full image.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -38,6 +38,13 @@ pub fn run(args: MergeArgs) -> Result<(), ExitCode> {
     if format.is_linear() && args.gamma {
         errln!("warning: --gamma has no effect on linear {} output", crate::render::format_name(format));
     }
+    if let Some(input) = args.parts.iter().find(|p| same_file(p, &args.output)) {
+        return Err(fail(&format!(
+            "the output `{}` is the part `{}`: merging would overwrite one of its own inputs; name another output",
+            args.output.display(),
+            input.display()
+        )));
+    }
     let mut parts: Vec<(PathBuf, Part)> = Vec::with_capacity(args.parts.len());
     for path in &args.parts {
         let part = parts::read_part(path).map_err(|e| fail(&e.to_string()))?;
@@ -61,6 +68,26 @@ pub fn run(args: MergeArgs) -> Result<(), ExitCode> {
         );
     }
     Ok(())
+}
+
+/// Whether `a` and `b` name the same existing file (the same file, not the same string:
+/// `./x.exr`, `x.exr`, a link to it and a path through a linked folder all are).
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (std::fs::metadata(a), std::fs::metadata(b)) {
+            (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        }
+    }
 }
 
 /// Prints an error and returns the failure exit code.

@@ -730,5 +730,25 @@ fn an_interrupted_render_says_its_checkpoint_is_kept() {
         "{stderr}"
     );
     assert!(dir.path().join("c.ckpt").exists());
+}
+
+#[test]
+fn a_file_of_nuls_gives_a_short_report() {
+    // 8 MB of NUL bytes: one line, one token. The report quoted it whole (5 bytes of escape per
+    // NUL, twice: over 80 MB of standard error); each quoted token is now cut with `...`.
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(dir.path().join("n.txt"), vec![0u8; 8 << 20]).expect("write scene");
+    // And a texture path of a million characters, quoted by the texture's messages.
+    let long_path =
+        format!("primitive sphere\n O= 0 0 0\n R= 1\n texture= {}.bmp\nend\n", "d".repeat(1 << 20));
+    std::fs::write(dir.path().join("t.txt"), long_path).expect("write scene");
+    for scene in ["n.txt", "t.txt"] {
+        let out = rayterra(&["render", scene, "-o", "out.png"], dir.path());
+        assert_eq!(out.status.code(), Some(1), "{scene}");
+        let stderr = text(&out.stderr);
+        assert!(stderr.len() < 8_000, "{scene}: {} bytes of messages:\n{:.2000}", stderr.len(), stderr);
+        assert!(stderr.contains("...`"), "{scene}: the quoted token is cut:\n{stderr}");
+        assert!(stderr.contains(&format!("--> {scene}:")), "{stderr}");
+    }
     assert!(!dir.path().join("out.png").exists());
 }

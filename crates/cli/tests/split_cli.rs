@@ -142,3 +142,39 @@ fn a_render_killed_with_sigterm_resumes_from_its_checkpoint() {
     assert!(read("out.png") == read("expected.png"), "the resumed render differs from the uninterrupted one");
     assert!(!checkpoint.exists(), "the checkpoint is removed once the image is written");
 }
+
+#[test]
+fn merge_refuses_a_damaged_part_and_an_output_that_is_an_input() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let cornell = scene("cornell.txt");
+    for tile in ["0/2", "1/2"] {
+        let name = format!("part-{}.exr", &tile[..1]);
+        let args = ["render", &cornell, "-q", "--size", "32x24", "--spp", "1", "--tile", tile, "-o", &name];
+        let out = rayterra(&args, dir.path());
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let part = dir.path().join("part-1.exr");
+    let original = std::fs::read(&part).expect("part");
+    // `-o` naming one of the inputs, as another string: refused, the part untouched.
+    for output in ["./part-1.exr", "part-1.exr"] {
+        let out = rayterra(&["merge", "part-0.exr", "part-1.exr", "-o", output], dir.path());
+        assert_eq!(out.status.code(), Some(1), "{output}");
+        assert!(stderr(&out).contains("would overwrite one of its own inputs"), "{}", stderr(&out));
+        assert_eq!(std::fs::read(&part).expect("part"), original, "{output}");
+    }
+    // One flipped bit in the last byte of pixel data (the end of the file): refused by name.
+    let mut damaged = original.clone();
+    let last = damaged.len() - 1;
+    damaged[last] ^= 0x01;
+    std::fs::write(&part, &damaged).expect("damaged");
+    let out = rayterra(&["merge", "part-0.exr", "part-1.exr", "-o", "merged.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let message = stderr(&out);
+    // (A flip the decoder notices is "cannot read"; one it does not, the checksum's "damaged".)
+    let named = message.contains("`part-1.exr`");
+    assert!(named && (message.contains("damaged") || message.contains("cannot read")), "{message}");
+    assert!(!dir.path().join("merged.png").exists());
+    std::fs::write(&part, &original).expect("repaired");
+    let out = rayterra(&["merge", "part-0.exr", "part-1.exr", "-o", "merged.png", "-q"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+}

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
+use crate::base::diagnostic::{clip, clip_path};
 use crate::base::memory::{MemoryBudget, OverBudget};
 pub use crate::scene::texture::{BUILTIN_PREFIX, Builtin, MAX_BUILTIN_COUNT, TextureRef, TextureSource};
 
@@ -33,7 +34,7 @@ const TILE: u32 = 4;
 #[derive(Debug, thiserror::Error)]
 pub enum TextureError {
     /// Not found in any of the folders searched.
-    #[error("cannot find texture `{name}` (looked in {})", display_paths(.searched))]
+    #[error("cannot find texture `{}` (looked in {})", clip(.name), display_paths(.searched))]
     NotFound {
         /// The path as written.
         name: String,
@@ -41,13 +42,13 @@ pub enum TextureError {
         searched: Vec<std::path::PathBuf>,
     },
     /// The path names a folder.
-    #[error("texture `{}` is a directory, not an image file", .path.display())]
+    #[error("texture `{}` is a directory, not an image file", clip_path(.path))]
     Directory {
         /// The folder.
         path: PathBuf,
     },
     /// The path names a device, a pipe or a socket.
-    #[error("texture `{}` is not a regular file", .path.display())]
+    #[error("texture `{}` is not a regular file", clip_path(.path))]
     NotAFile {
         /// The path.
         path: PathBuf,
@@ -56,7 +57,7 @@ pub enum TextureError {
     /// decoding).
     #[error(
         "texture `{}` is {width}x{height} pixels, larger than the {MAX_TEXTURE_SIDE} pixels a side a texture may have",
-        .path.display()
+        clip_path(.path)
     )]
     TooLarge {
         /// The file.
@@ -67,7 +68,7 @@ pub enum TextureError {
         height: u32,
     },
     /// The image has no pixels (a width or a height of 0).
-    #[error("texture `{}` is an empty image ({width}x{height} pixels)", .path.display())]
+    #[error("texture `{}` is an empty image ({width}x{height} pixels)", clip_path(.path))]
     Empty {
         /// The file.
         path: PathBuf,
@@ -77,7 +78,7 @@ pub enum TextureError {
         height: u32,
     },
     /// Decoding and keeping the image would take the scene past its memory budget.
-    #[error("texture `{}` ({width}x{height} pixels) {over}", .path.display())]
+    #[error("texture `{}` ({width}x{height} pixels) {over}", clip_path(.path))]
     OverBudget {
         /// The file.
         path: PathBuf,
@@ -89,7 +90,7 @@ pub enum TextureError {
         over: OverBudget,
     },
     /// Found but unreadable or not a supported image.
-    #[error("cannot read texture `{}`: {source}", .path.display())]
+    #[error("cannot read texture `{}`: {source}", clip_path(.path))]
     Unreadable {
         /// The file.
         path: PathBuf,
@@ -176,7 +177,7 @@ fn open_file(path: &Path) -> Result<image::ImageReader<std::io::BufReader<std::f
 }
 
 fn display_paths(paths: &[std::path::PathBuf]) -> String {
-    paths.iter().map(|p| format!("`{}`", p.display())).collect::<Vec<_>>().join(", ")
+    paths.iter().map(|p| format!("`{}`", clip_path(p))).collect::<Vec<_>>().join(", ")
 }
 
 /// Largest texture side accepted, in pixels.

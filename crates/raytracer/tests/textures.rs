@@ -136,3 +136,42 @@ fn course_paths_with_folders_fall_back_to_the_file_name_with_a_note() {
     let message = &errors[0].message;
     assert!(message.contains("src/wall.bmp") && message.contains("/wall.bmp`"), "{message}");
 }
+
+/// Parses and prepares scene `text`, renders it at 80 x 60 with 4 samples a pixel, and returns the
+/// 8-bit pixels.
+fn render_file_text(text: &str) -> Vec<u8> {
+    let source = SourceFile::from_text("nomal.txt", None, text.to_owned());
+    let parsed = scene::parse(&source).unwrap_or_else(|e| panic!("{e}"));
+    let scene = PreparedScene::new(parsed.scene, &TextureSearch::default()).expect("prepared");
+    let settings = raytracer::RenderSettings {
+        width: 80,
+        height: 60,
+        sampling: raytracer::Sampling::Uniform(4),
+        threads: Some(2),
+        seed: 0,
+        ..raytracer::RenderSettings::for_scene(&scene)
+    };
+    let rendered =
+        raytracer::render(&scene, &settings, &|_: raytracer::render::Progress| {}).expect("render");
+    rendered.image.to_rgb8(false).into_raw()
+}
+
+#[test]
+fn nomal_ball_and_nomal_plane_render_as_normal_mapped_sphere_and_plane() {
+    // scenes/nomal-shapes.txt, the example of docs/scene-language.md, renders as the same scene
+    // written with `primitive sphere` and `primitive plane`, and its normal maps show (without
+    // `NT=` the picture differs).
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/nomal-shapes.txt");
+    let text = std::fs::read_to_string(&path).expect("scenes/nomal-shapes.txt");
+    assert!(text.contains("primitive NomalBall") && text.contains("primitive NomalPlane"));
+    let aliased = render_file_text(&text);
+    let plain = text
+        .replace("primitive NomalBall", "primitive sphere")
+        .replace("primitive NomalPlane", "primitive plane");
+    assert!(aliased == render_file_text(&plain), "NomalBall/NomalPlane differ from sphere/plane with `NT=`");
+    let flat: String =
+        plain.lines().filter(|l| !l.trim_start().starts_with("NT=")).map(|l| format!("{l}\n")).collect();
+    let unmapped = render_file_text(&flat);
+    let changed = aliased.chunks(3).zip(unmapped.chunks(3)).filter(|(a, b)| a != b).count();
+    assert!(changed > 80 * 60 / 10, "the normal maps change {changed} pixels of 4800");
+}

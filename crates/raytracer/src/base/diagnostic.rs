@@ -35,15 +35,92 @@ impl fmt::Display for Severity {
     }
 }
 
-/// Where a diagnostic points: the file, the span and a copy of the line's text.
+/// Where a diagnostic points: the file, the span and a copy of the line's text around it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Location {
     /// File name as shown to the user.
     pub file: String,
     /// Line, column and length of the marked text.
     pub span: Span,
-    /// The full text of the line (for the excerpt).
+    /// The text of the line (for the excerpt): the whole line, or for a line longer than
+    /// [`MAX_KEPT_LINE_CHARS`] characters the characters around the marked text.
     pub line_text: String,
+    /// The 1-based column of the line where `line_text` starts: 1, unless a long line was cut.
+    pub text_column: u32,
+}
+
+/// Most characters of a line a [`Location`] keeps: a longer line keeps the characters around the
+/// marked text (more than an excerpt shows), so that a diagnostic about a line of 100 MB does
+/// not copy it.
+pub const MAX_KEPT_LINE_CHARS: usize = 1024;
+
+impl Location {
+    /// The place `span` marks in line `line` of file `file`, keeping at most
+    /// [`MAX_KEPT_LINE_CHARS`] characters of the line.
+    pub fn new(file: impl Into<String>, span: Span, line: &str) -> Location {
+        let file = file.into();
+        if line.len() <= MAX_KEPT_LINE_CHARS {
+            return Location { file, span, line_text: line.to_owned(), text_column: 1 };
+        }
+        let half = MAX_KEPT_LINE_CHARS / 2;
+        let skip = (span.column as usize).saturating_sub(1).saturating_sub(half);
+        let line_text: String = line.chars().skip(skip).take(MAX_KEPT_LINE_CHARS).collect();
+        Location { file, span, line_text, text_column: skip as u32 + 1 }
+    }
+
+    /// The marked text as the line holds it (cut to the part of the line kept).
+    pub fn marked_text(&self) -> String {
+        let skip = (self.span.column.saturating_sub(self.text_column)) as usize;
+        self.line_text.chars().skip(skip).take(self.span.len as usize).collect()
+    }
+}
+
+/// Most characters of a piece of input (a name, a number, a key, a path) quoted in a message;
+/// a longer one is cut, with `...` (see [`clip`]).
+pub const MAX_QUOTED_CHARS: usize = 64;
+
+/// Most characters of a message, a note or a file name as printed (after escaping): a safety net
+/// behind [`clip`], so that no diagnostic prints more than a few kilobytes.
+pub const MAX_PRINTED_CHARS: usize = 1000;
+
+/// A piece of input to quote in a message, cut to [`MAX_QUOTED_CHARS`] characters with `...`
+/// after it when longer: `format!("unknown block `{}`", clip(name))`. Allocates nothing.
+pub fn clip(text: &str) -> Clipped<'_> {
+    Clipped(text)
+}
+
+/// A path to quote in a message, cut as [`clip`] cuts text.
+pub fn clip_path(path: &std::path::Path) -> Clipped<'_> {
+    Clipped(path.to_str().unwrap_or("(a path that is not UTF-8)"))
+}
+
+/// Text shown cut to [`MAX_QUOTED_CHARS`] characters (made by [`clip`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Clipped<'a>(&'a str);
+
+impl fmt::Display for Clipped<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0.char_indices().nth(MAX_QUOTED_CHARS) {
+            None => f.write_str(self.0),
+            Some((end, _)) => write!(f, "{}...", &self.0[..end]),
+        }
+    }
+}
+
+/// `text` cut to `max` characters, with `...` after it when longer.
+fn bounded(text: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(max) {
+        None => std::borrow::Cow::Borrowed(text),
+        Some((end, _)) => std::borrow::Cow::Owned(format!("{}...", &text[..end])),
+    }
+}
+
+/// Text to print: escaped ([`escape_for_terminal`]), then cut to [`MAX_PRINTED_CHARS`].
+fn printable(text: &str) -> String {
+    // Cut before escaping too (an escape is at most 10 characters), so that the escaped copy of
+    // a huge text is never made.
+    let cut = bounded(text, MAX_PRINTED_CHARS);
+    bounded(&escape_for_terminal(&cut), MAX_PRINTED_CHARS).into_owned()
 }
 
 /// One message about a scene file.
@@ -202,17 +279,21 @@ impl fmt::Display for Diagnostic {
     /// ```
     ///
     /// Control and bidirectional characters are shown escaped; a line wider than 100 columns is
-    /// cut around the marked text.
+    /// cut around the marked text; a message, note or file name longer than
+    /// [`MAX_PRINTED_CHARS`] characters is cut, with `...`.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "{}: {}", self.severity, escape_for_terminal(&self.message))?;
+        writeln!(f, "{}: {}", self.severity, printable(&self.message))?;
         let gutter = match &self.location {
             Some(loc) => {
                 let number = loc.span.line.to_string();
                 let pad = " ".repeat(number.len());
-                let file = escape_for_terminal(&loc.file);
+                let file = printable(&loc.file);
                 writeln!(f, "{pad}--> {file}:{}:{}", loc.span.line, loc.span.column)?;
                 writeln!(f, "{pad} |")?;
-                let (echoed, caret_start, caret_len) = excerpt(&loc.line_text, loc.span.column, loc.span.len);
+                // The columns within the text kept (the marked text may start before it only
+                // when the location was made by hand).
+                let column = loc.span.column.saturating_sub(loc.text_column.saturating_sub(1)).max(1);
+                let (echoed, caret_start, caret_len) = excerpt(&loc.line_text, column, loc.span.len);
                 writeln!(f, "{number} | {}", echoed.trim_end())?;
                 writeln!(f, "{pad} | {}{}", " ".repeat(caret_start), "^".repeat(caret_len))?;
                 pad
@@ -220,7 +301,7 @@ impl fmt::Display for Diagnostic {
             None => String::new(),
         };
         for note in &self.notes {
-            writeln!(f, "{gutter} = note: {}", escape_for_terminal(note))?;
+            writeln!(f, "{gutter} = note: {}", printable(note))?;
         }
         Ok(())
     }
@@ -234,11 +315,7 @@ mod tests {
         Diagnostic {
             severity: Severity::Error,
             message: "bad".into(),
-            location: Some(Location {
-                file: "s.txt".into(),
-                span: Span { line: 7, column, len },
-                line_text: line_text.into(),
-            }),
+            location: Some(Location::new("s.txt", Span { line: 7, column, len }, line_text)),
             notes: vec!["help text".into()],
         }
     }
@@ -297,6 +374,59 @@ mod tests {
         let text = at(&line, 999_999, 1).to_string();
         assert!(text.len() < 400, "{text}");
         assert!(started.elapsed() < std::time::Duration::from_secs(10), "{:?}", started.elapsed());
+    }
+
+    #[test]
+    fn clip_cuts_long_input_with_an_ellipsis() {
+        assert_eq!(clip("sphere").to_string(), "sphere");
+        let exact = "x".repeat(MAX_QUOTED_CHARS);
+        assert_eq!(clip(&exact).to_string(), exact);
+        let long = "\u{e9}".repeat(10 * MAX_QUOTED_CHARS);
+        let cut = clip(&long).to_string();
+        assert_eq!(cut.chars().count(), MAX_QUOTED_CHARS + 3, "{cut}");
+        assert!(cut.ends_with("...") && cut.starts_with("\u{e9}\u{e9}"), "{cut}");
+        let path = std::path::PathBuf::from("a/".repeat(1000));
+        assert_eq!(clip_path(&path).to_string().len(), MAX_QUOTED_CHARS + 3);
+    }
+
+    #[test]
+    fn a_huge_line_of_nuls_gives_a_small_diagnostic() {
+        // A 10 MB line of NUL characters (one token): the location keeps a window of the line,
+        // and a message quoting the whole token by mistake is still cut when printed.
+        let line = "\0".repeat(10 << 20);
+        let started = std::time::Instant::now();
+        let span = Span { line: 1, column: 1, len: line.len() as u32 };
+        let location = Location::new("n.txt", span, &line);
+        assert!(location.line_text.len() <= MAX_KEPT_LINE_CHARS, "{}", location.line_text.len());
+        let d = Diagnostic {
+            severity: Severity::Error,
+            message: format!("unknown block `{line}`"),
+            location: Some(location),
+            notes: vec![line.clone()],
+        };
+        let text = d.to_string();
+        assert!(text.len() < 3 * MAX_PRINTED_CHARS + 1000, "{} bytes", text.len());
+        assert!(text.starts_with("error: unknown block `\\u{0}\\u{0}"), "{}", &text[..100]);
+        assert!(started.elapsed() < std::time::Duration::from_secs(10), "{:?}", started.elapsed());
+    }
+
+    #[test]
+    fn a_cut_line_keeps_the_marked_text_and_its_column() {
+        // The marked text 5000 characters into a line of 10000: the location keeps the text
+        // around it, the arrow names the column in the file, the caret sits under the mark.
+        let mut line = "a ".repeat(2500);
+        line.push('X');
+        line.push_str(&" b".repeat(2500));
+        let d = at(&line, 5001, 1);
+        let location = d.location.as_ref().expect("a location");
+        assert!(location.text_column > 1 && location.line_text.chars().count() <= MAX_KEPT_LINE_CHARS);
+        assert_eq!(location.marked_text(), "X");
+        let text = d.to_string();
+        assert!(text.contains(" --> s.txt:7:5001\n"), "{text}");
+        let echoed = text.lines().nth(3).expect("excerpt");
+        let caret = text.lines().nth(4).expect("caret");
+        assert_eq!(caret.find('^'), echoed.find('X'), "{echoed}\n{caret}");
+        assert!(echoed.starts_with("7 | ...") && echoed.ends_with("..."), "{echoed}");
     }
 
     #[test]

@@ -5,6 +5,7 @@
 //! - [`ray`] and [`bounds`]: rays (z-up world, `f64`) and axis-aligned boxes;
 //! - [`error`]: invalid shape parameters, and the vector checks behind them;
 //! - [`rows`]: sets of image rows and how they are cut into tiles;
+//! - [`checksum`]: the hash that tells a damaged checkpoint or part file;
 //! - [`memory`]: the memory budget and byte counts for messages;
 //! - [`sampler`] and [`sampling`]: per-pixel random streams, exact sums, and warping of uniform
 //!   numbers to directions;
@@ -14,6 +15,7 @@
 //! `raytracer::scene::Location`, ...) by re-exporting these modules.
 
 pub mod bounds;
+pub mod checksum;
 pub mod diagnostic;
 pub mod error;
 pub mod image_io;

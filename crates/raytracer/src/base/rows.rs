@@ -47,10 +47,14 @@ impl Split {
 
     /// Parses `K/N`.
     pub fn parse(text: &str) -> Result<Split, String> {
+        let full = text;
+        let text = super::diagnostic::clip(full);
         let (k, n) =
-            text.split_once('/').ok_or_else(|| format!("expected K/N (such as 3/8), not `{text}`"))?;
+            full.split_once('/').ok_or_else(|| format!("expected K/N (such as 3/8), not `{text}`"))?;
         let parse = |s: &str, what: &str| {
-            s.trim().parse::<u32>().map_err(|_| format!("`{s}` in `{text}` is not a valid {what}"))
+            s.trim()
+                .parse::<u32>()
+                .map_err(|_| format!("`{}` in `{text}` is not a valid {what}", super::diagnostic::clip(s)))
         };
         let (index, count) = (parse(k, "part number")?, parse(n, "part count")?);
         if count == 0 {

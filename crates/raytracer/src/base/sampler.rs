@@ -87,9 +87,11 @@ impl PixelRng {
 
 /// An exact sum of RGB samples: each sample is rounded once to a fixed-point grid of
 /// [`ExactSum::RESOLUTION`] (2^-40, about 1e-12) and summed in 128-bit integers, so a sum does
-/// not depend on the order or grouping of its terms. Samples beyond `2^54` in magnitude are
-/// clamped to it (no light path of a sane scene comes near) and non-finite samples count as 0,
-/// so up to 2^32 samples can be summed without overflow.
+/// not depend on the order or grouping of its terms. Samples beyond [`ExactSum::LIMIT`] (`2^54`,
+/// about 1.8e16) in magnitude are clamped to it (no light path of a sane scene comes near) and
+/// non-finite samples count as 0, so up to 2^32 samples can be summed without overflow. These
+/// bounds are the only clamping of the path model, as `docs/raytracer-models.md` says (a test
+/// keeps the two in step).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct ExactSum {
     /// The sum of each channel in units of [`ExactSum::RESOLUTION`].
@@ -262,6 +264,33 @@ mod tests {
         let c = PixelRng::new(9, 11, 10, 0).uniform();
         assert_eq!(a, b);
         assert_ne!(a[0], c);
+    }
+
+    #[test]
+    fn the_sums_bounds_are_those_the_docs_state() {
+        // 2^32 samples at the limit fit in the 128-bit sum.
+        let per_sample = (ExactSum::LIMIT / ExactSum::RESOLUTION) as i128;
+        assert_eq!(per_sample, 1i128 << 94);
+        assert!(per_sample.checked_mul(1 << 32).is_some_and(|total| total < i128::MAX));
+        let mut sum = ExactSum::default();
+        sum.add(glam::DVec3::new(1e300, -1e300, f64::NAN));
+        assert_eq!(sum.fixed, [1i128 << 94, -(1i128 << 94), 0], "clamped to the limit; NaN is 0");
+        let mut tiny = ExactSum::default();
+        tiny.add(glam::DVec3::new(4.0e-13, 5.0e-13, 1.0));
+        assert_eq!(tiny.fixed, [0, 1, 1i128 << 40], "below half the grid's step counts as 0");
+        // The documentation says the path model clamps nothing but this, with these numbers (it
+        // said "Nothing is clamped", which was not so).
+        let docs =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../docs/raytracer-models.md"))
+                .expect("docs/raytracer-models.md");
+        assert!(!docs.contains("Nothing is\nclamped") && !docs.contains("Nothing is clamped"));
+        for stated in
+            ["beyond 2^54", "about 1.8e16", "grid of 2^-40", "below 2^-41", "count as 0", "2^32 samples"]
+        {
+            assert!(docs.contains(stated), "docs/raytracer-models.md should say `{stated}`");
+        }
+        assert_eq!(ExactSum::LIMIT, 2f64.powi(54));
+        assert_eq!(ExactSum::RESOLUTION, 2f64.powi(-40));
     }
 
     #[test]

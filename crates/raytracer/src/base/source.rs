@@ -184,7 +184,7 @@ impl SourceFile {
 
     /// The place `span` marks in this file, for a diagnostic made later.
     pub fn location(&self, span: Span) -> Location {
-        Location { file: self.name.clone(), span, line_text: self.line(span.line).to_owned() }
+        Location::new(self.name.clone(), span, self.line(span.line))
     }
 }
 

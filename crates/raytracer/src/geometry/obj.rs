@@ -15,7 +15,7 @@ use std::sync::Arc;
 use glam::{DMat3, DVec3};
 
 use super::mesh::{MeshVertices, TriangleIndices, smooth_normals};
-use crate::base::diagnostic::Location;
+use crate::base::diagnostic::{Location, clip};
 
 /// Largest OBJ file read, in bytes (2 GiB: about 40 million triangles).
 pub const MAX_OBJ_BYTES: u64 = 2 << 30;
@@ -166,7 +166,8 @@ pub fn parse_obj(
             if let Some((line, lib)) = first_mtllib(&text) {
                 let why = library_problem.into_inner().unwrap_or_else(|| e.to_string());
                 warnings.push(format!(
-                    "{file}:{line}: cannot read the material library `{lib}` ({why}); the scene's material is used"
+                    "{file}:{line}: cannot read the material library `{}` ({why}); the scene's material is used",
+                    clip(&lib)
                 ));
             }
             Vec::new()
@@ -375,12 +376,20 @@ fn check_faces(text: &str) -> Result<(), (u32, String)> {
                             0 => ("vertex", "vertices", nv),
                             1 => ("texture coordinate", "texture coordinates", nt),
                             2 => ("normal", "normals", nn),
-                            _ => return Err((number, format!("`{word}` has more than three indices"))),
+                            _ => {
+                                return Err((
+                                    number,
+                                    format!("`{}` has more than three indices", clip(word)),
+                                ));
+                            }
                         };
                         let index: i64 = part.parse().map_err(|_| {
                             (
                                 number,
-                                format!("`{word}` is not a face corner (`v`, `v/vt`, `v//vn` or `v/vt/vn`)"),
+                                format!(
+                                    "`{}` is not a face corner (`v`, `v/vt`, `v//vn` or `v/vt/vn`)",
+                                    clip(word)
+                                ),
                             )
                         })?;
                         let valid = if index > 0 { index <= count } else { index < 0 && -index <= count };

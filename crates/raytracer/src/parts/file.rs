@@ -14,6 +14,7 @@ use exr::prelude::{
 };
 
 use super::{Block, Part, PartError, PartHeader, Split, tile_rows};
+use crate::base::checksum::Fnv;
 use crate::base::memory::MemoryBudget;
 use crate::base::sampler::ExactSum;
 use crate::scene::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
@@ -24,6 +25,45 @@ const ATTR_SETTINGS: &str = "rayterra.settings";
 const ATTR_TILE: &str = "rayterra.tile";
 const ATTR_PASS: &str = "rayterra.pass";
 const ATTR_SAMPLES: &str = "rayterra.samples";
+/// The checksum of everything else the part holds ([`checksum`]), as 16 hexadecimal digits.
+const ATTR_CHECKSUM: &str = "rayterra.checksum";
+
+/// The header's attributes as a part file holds them (text reduced to printable ASCII).
+fn header_attributes(h: &PartHeader) -> [(&'static str, String); 5] {
+    [
+        (ATTR_SCENE, ascii(&h.scene)),
+        (ATTR_SETTINGS, ascii(&h.settings)),
+        (ATTR_TILE, h.tile.to_string()),
+        (ATTR_PASS, h.pass.to_string()),
+        (ATTR_SAMPLES, h.samples.to_string()),
+    ]
+}
+
+/// The 64-bit FNV-1a hash of what a part file holds: the size, the header's attributes as
+/// written, and each block's rows, pixel values and sums, bit for bit. A byte changed anywhere
+/// in a part (its pixels, its sums, its attributes, its checksum) changes what is read or the
+/// checksum it is compared with, so a damaged part is refused rather than merged.
+fn checksum(width: u32, height: u32, attributes: &[(&str, String)], blocks: &[Block]) -> u64 {
+    let mut hash = Fnv::default();
+    hash.write(&width.to_le_bytes());
+    hash.write(&height.to_le_bytes());
+    for (name, value) in attributes {
+        hash.write_text(name);
+        hash.write_text(value);
+    }
+    let mut bytes = Vec::new();
+    for block in blocks {
+        hash.write(&block.rows.start.to_le_bytes());
+        hash.write(&block.rows.end.to_le_bytes());
+        bytes.clear();
+        bytes.extend(block.pixels.iter().flatten().flat_map(|v| v.to_bits().to_le_bytes()));
+        if let Some(sums) = &block.sums {
+            bytes.extend(sums.iter().flat_map(|s| s.fixed).flat_map(i128::to_le_bytes));
+        }
+        hash.write(&bytes);
+    }
+    hash.0
+}
 
 /// Why a part file could not be written; the message names the target.
 pub type PartWriteError = atomic_file::WriteError<exr::error::Error>;
@@ -33,14 +73,10 @@ pub fn write_part(part: &Part, path: &Path) -> Result<(), PartWriteError> {
     let h = &part.header;
     let mut attributes =
         ImageAttributes::new(IntegerBounds::new((0, 0), (h.width as usize, h.height as usize)));
-    for (name, value) in [
-        (ATTR_SCENE, h.scene.clone()),
-        (ATTR_SETTINGS, h.settings.clone()),
-        (ATTR_TILE, h.tile.to_string()),
-        (ATTR_PASS, h.pass.to_string()),
-        (ATTR_SAMPLES, h.samples.to_string()),
-    ] {
-        attributes.other.insert(Text::from(name), AttributeValue::Text(text(&value)));
+    let header = header_attributes(h);
+    let sum = checksum(h.width, h.height, &header, &part.blocks);
+    for (name, value) in header.into_iter().chain([(ATTR_CHECKSUM, format!("{sum:016x}"))]) {
+        attributes.other.insert(Text::from(name), AttributeValue::Text(Text::from(value.as_str())));
     }
     let layers: Vec<Layer<AnyChannels<FlatSamples>>> = part
         .blocks
@@ -94,10 +130,13 @@ fn part_channels(is_pass: bool) -> Vec<(String, SampleType)> {
 }
 
 /// The text of an attribute, with anything but printable ASCII replaced (EXR text is bytes).
+fn ascii(value: &str) -> String {
+    value.chars().map(|c| if c.is_ascii_graphic() || c == ' ' { c } else { '?' }).collect()
+}
+
+/// [`ascii`] as an EXR text.
 fn text(value: &str) -> Text {
-    let ascii: String =
-        value.chars().map(|c| if c.is_ascii_graphic() || c == ' ' { c } else { '?' }).collect();
-    Text::from(ascii.as_str())
+    Text::from(ascii(value).as_str())
 }
 
 /// Reads a part file written by [`write_part`], its pixels within the default memory budget
@@ -154,6 +193,7 @@ pub fn read_part_from(
             .parse()
             .map_err(|_| not_a_part(format!("`{ATTR_SAMPLES}` is not a count")))?,
     };
+    let written_sum = attr(ATTR_CHECKSUM)?;
     let expected = tile_rows(header.height, header.tile).map_err(not_a_part)?;
     // In 64 bits: a layer's position and size are the file's word.
     let layout: Vec<Range<u64>> = meta
@@ -199,6 +239,13 @@ pub fn read_part_from(
             decode_blocks(chunks, path, expected, &channels)
         })
         .inspect_err(|_| budget.release(pixel_bytes))?;
+    let sum = checksum(header.width, header.height, &header_attributes(&header), &blocks);
+    if written_sum != format!("{sum:016x}") {
+        budget.release(pixel_bytes);
+        return Err(not_a_part(
+            "its content does not match its checksum: the file is damaged (render this part again)".into(),
+        ));
+    }
     Ok(Part { header, blocks })
 }
 

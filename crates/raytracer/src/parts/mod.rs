@@ -21,8 +21,10 @@
 //! channels (`sum.R.0` .. `sum.B.3`, each sum's 128 bits from the lowest word up), and attributes
 //! that say what it is: `rayterra.scene` (a digest of the scene and the files it reads),
 //! `rayterra.settings` (everything else that shapes the pixels), `rayterra.tile`, `rayterra.pass`
-//! and `rayterra.samples` (the estimates in each sum). [`merge`] refuses parts that do not fit
-//! together.
+//! and `rayterra.samples` (the estimates in each sum), and `rayterra.checksum`: the FNV-1a hash of
+//! all the rest (size, attributes, rows, pixel values and sums, bit for bit), checked when the part
+//! is read, so that a damaged part is refused, naming the file. [`merge`] refuses parts that do
+//! not fit together.
 
 mod file;
 mod merge;
@@ -301,6 +303,58 @@ mod tests {
         let budget = MemoryBudget::new(720);
         read_part_from(open(), &path, &budget).expect("within budget");
         assert_eq!(budget.used(), 720, "the part holds its pixels");
+    }
+
+    #[test]
+    fn a_part_with_any_byte_changed_is_refused_or_unchanged() {
+        // A pass (pixels and sums) of a 3 x 20 image: flipping any one bit of any byte of its
+        // file either makes it refused, or leaves what is read the same (a byte the reader
+        // ignores); it never changes a pixel or a sum. Before the checksum, a flipped bit in
+        // the pixel data changed a pixel of the merged image.
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("part.exr");
+        let tile = Split { index: 0, count: 2 };
+        let rows = Rows::tile(3, 20, tile).expect("tile");
+        let pixels = PortionPixels::Sums { sums: sums_of(&values(&rows, 0.75)), count: 2 };
+        let part = Part::from_portion(header(tile, Split { index: 1, count: 2 }), &rows, pixels);
+        write_part(&part, &path).expect("written");
+        let bytes = std::fs::read(&path).expect("read");
+        // Where the checksum attribute (name, type, size, value) lies: a flip there is no
+        // damage to the picture.
+        let name_at = bytes.windows(17).position(|w| w == b"rayterra.checksum").expect("the attribute");
+        let attribute = name_at..name_at + 17 + 1 + 5 + 4 + 16;
+        let (mut refused, mut checksum_refusals) = (0, 0);
+        for i in 0..bytes.len() {
+            for bit in [0x01u8, 0x80] {
+                let mut damaged = bytes.clone();
+                damaged[i] ^= bit;
+                let budget = MemoryBudget::new(1 << 24);
+                match read_part_from(std::io::Cursor::new(&damaged), &path, &budget) {
+                    Ok(read) => assert_eq!(read, part, "byte {i} ^ {bit:#x} changed the part"),
+                    Err(e) => {
+                        refused += 1;
+                        let message = e.to_string();
+                        assert!(message.contains(&path.display().to_string()), "{message}");
+                        // Refused by the checksum alone: without it, this flip changed the part.
+                        checksum_refusals += (message.contains("does not match its checksum")
+                            && !attribute.contains(&i)) as usize;
+                    }
+                }
+            }
+        }
+        assert!(refused > bytes.len() / 2, "{refused} of {} refused", 2 * bytes.len());
+        assert!(
+            checksum_refusals > 100,
+            "{checksum_refusals} flips of the pixels or sums caught by the checksum"
+        );
+        // A part file without a checksum (written before there was one) is refused by name.
+        let mut old = bytes.clone();
+        let at = old.windows(17).position(|w| w == b"rayterra.checksum").expect("the attribute");
+        old[at..at + 17].copy_from_slice(b"rayterra.checksun");
+        let err = read_part_from(std::io::Cursor::new(&old), &path, &MemoryBudget::new(1 << 24))
+            .expect_err("no checksum")
+            .to_string();
+        assert!(err.contains("has no `rayterra.checksum` attribute"), "{err}");
     }
 
     #[test]

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use super::TextureSearch;
+use crate::base::diagnostic::{clip, clip_path};
 use crate::base::memory::MemoryBudget;
 use crate::geometry::obj::{LoadedObj, ObjError, load_obj};
 use crate::geometry::{MeshFile, Shape, TriangleMesh};
@@ -42,8 +43,8 @@ pub(super) fn load_meshes(
                     severity: Severity::Error,
                     message: format!(
                         "cannot find mesh `{}` (looked in {})",
-                        file.path,
-                        searched.iter().map(|p| format!("`{}`", p.display())).collect::<Vec<_>>().join(", ")
+                        clip(&file.path),
+                        searched.iter().map(|p| format!("`{}`", clip_path(p))).collect::<Vec<_>>().join(", ")
                     ),
                     location: Some(file.location.clone()),
                     notes: vec![
@@ -60,7 +61,7 @@ pub(super) fn load_meshes(
                     };
                     Err(obj_diagnostic(
                         &file.location,
-                        ObjError { file: file.path.clone(), line: None, message },
+                        ObjError { file: clip(&file.path).to_string(), line: None, message },
                     ))
                 }
             };
@@ -216,8 +217,7 @@ pub(super) fn load_textures(
 
 /// The `texture=` value as written in the file.
 fn written_name(t: &TextureRef) -> String {
-    let span = t.location.span;
-    t.location.line_text.chars().skip(span.column as usize - 1).take(span.len as usize).collect()
+    t.location.marked_text()
 }
 
 /// The note on a texture found by its bare file name.
@@ -226,8 +226,8 @@ fn found_by_file_name_note(t: &TextureRef, path: &Path) -> Diagnostic {
         severity: Severity::Note,
         message: format!(
             "`{}` is not there as written; using `{}`, found by its file name",
-            written_name(t),
-            path.display()
+            clip(&written_name(t)),
+            clip_path(path)
         ),
         location: Some(t.location.clone()),
         notes: vec![

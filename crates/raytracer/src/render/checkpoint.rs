@@ -26,6 +26,7 @@ use std::time::{Duration, Instant};
 use glam::DVec3;
 
 use super::Rows;
+use crate::base::checksum::Fnv;
 use crate::base::sampler::ExactSum;
 use crate::integrator::sppm::{SppmState, SppmStats};
 
@@ -407,23 +408,6 @@ fn sppm_record(run: u32, state: &SppmState) -> Vec<u8> {
     }
     state.values().iter().for_each(|v| payload.extend_from_slice(&v.to_le_bytes()));
     record(TAG_SPPM, run, 0, &payload)
-}
-
-/// The 64-bit FNV-1a hash: enough to tell a damaged record (not an adversary's).
-struct Fnv(u64);
-
-impl Default for Fnv {
-    fn default() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv {
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
 }
 
 #[cfg(test)]

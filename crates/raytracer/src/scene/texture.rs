@@ -59,14 +59,15 @@ impl Builtin {
                 Some(c) => match c.parse::<u32>() {
                     Ok(n) if (1..=MAX_BUILTIN_COUNT).contains(&n) => Ok(n),
                     _ => Err(format!(
-                        "the count in `builtin:{spec}` must be a whole number from 1 to {MAX_BUILTIN_COUNT}"
+                        "the count in `builtin:{}` must be a whole number from 1 to {MAX_BUILTIN_COUNT}",
+                        crate::base::diagnostic::clip(spec)
                     )),
                 },
             }
         };
         let no_count = |b: Builtin| match count_text {
             None => Ok(b),
-            Some(_) => Err(format!("`builtin:{name}` takes no count")),
+            Some(_) => Err(format!("`builtin:{}` takes no count", crate::base::diagnostic::clip(name))),
         };
         match name {
             "marble" => no_count(Builtin::Marble),
@@ -74,7 +75,8 @@ impl Builtin {
             "checker" => Ok(Builtin::Checker(count(8)?)),
             "stripes" => Ok(Builtin::Stripes(count(8)?)),
             _ => Err(format!(
-                "unknown built-in texture `{name}`; the built-in textures are {}",
+                "unknown built-in texture `{}`; the built-in textures are {}",
+                crate::base::diagnostic::clip(name),
                 Builtin::NAMES.map(|n| format!("`builtin:{n}`")).join(", ")
             )),
         }

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use super::super::{PhotonSettings, Scene};
 use super::lexer::{Token, char_count, tokenize};
 use super::{MAX_KEPT_DIAGNOSTICS, Omitted, parser_has_errors};
-use crate::base::diagnostic::{Diagnostic, Severity};
+use crate::base::diagnostic::{Diagnostic, Severity, clip};
 use crate::base::source::{SourceFile, Span, numbered_lines};
 use crate::material::Material;
 
@@ -96,6 +96,12 @@ pub(super) const PRIMITIVE_TYPES: &str =
 /// Primitive types that some students' renderers had and that their own parsers ignored too
 /// (spec section 9): skipped with a warning that says so.
 pub(super) const IGNORED_PRIMITIVES: [&str; 2] = ["torus", "cube"];
+
+/// Primitive types of LuChengTHU's renderer of the course that are other names of ours: its
+/// normal-mapped sphere and plane (`NT=` the normal map; spelled so), read as `sphere` and `plane`
+/// with a note.
+pub(super) const ALIAS_PRIMITIVES: [(&str, PrimitiveKind); 2] =
+    [("NomalBall", PrimitiveKind::Sphere), ("NomalPlane", PrimitiveKind::Plane)];
 
 /// The key a `primitive bezier` block repeats, one control point a line (`P= z r`).
 pub(super) const BEZIER_POINT_KEY: &str = "P";
@@ -382,7 +388,7 @@ impl<'s> Parser<'s> {
         {
             self.diagnostics.push(Diagnostic::general(
                 Severity::Warning,
-                format!("`{}` describes no lights and no primitives", self.source.name()),
+                format!("`{}` describes no lights and no primitives", clip(self.source.name())),
             ));
         }
     }
@@ -408,7 +414,7 @@ impl<'s> Parser<'s> {
                     } else {
                         PRIMITIVE_TYPES
                     };
-                    self.error(span, format!("`{}` needs a type: {choices}", first.text));
+                    self.error(span, format!("`{}` needs a type: {choices}", clip(first.text)));
                     return State::Skipping(span);
                 };
                 let ty_span = ty.span(line);
@@ -420,6 +426,24 @@ impl<'s> Parser<'s> {
                     ("primitive" | "obj", ty) => PrimitiveKind::from_name(ty).map(BlockKind::Primitive),
                     _ => None,
                 };
+                let alias =
+                    ALIAS_PRIMITIVES.iter().find(|(name, _)| first.text != "light" && *name == ty.text);
+                let kind = match (kind, alias) {
+                    (None, Some(&(name, alias))) => {
+                        self.report(
+                            Severity::Note,
+                            ty_span,
+                            format!("`{} {name}` is read as `primitive {}`", first.text, alias.name()),
+                        )
+                        .notes
+                        .push(format!(
+                            "`{name}` is another name of `{}` with its normal map `NT=` (LuChengTHU's renderer)",
+                            alias.name()
+                        ));
+                        Some(BlockKind::Primitive(alias))
+                    }
+                    (kind, _) => kind,
+                };
                 match kind {
                     Some(kind) => {
                         self.warn_trailing(line, &tokens[2..], "after the block type");
@@ -429,10 +453,15 @@ impl<'s> Parser<'s> {
                         let message = if first.text != "light" && IGNORED_PRIMITIVES.contains(&ty.text) {
                             format!(
                                 "`{} {}` is not part of the scene language (the renderers that read it ignored it too); the block is skipped",
-                                first.text, ty.text
+                                clip(first.text),
+                                clip(ty.text)
                             )
                         } else {
-                            format!("unknown {} type `{}`; the block is skipped", first.text, ty.text)
+                            format!(
+                                "unknown {} type `{}`; the block is skipped",
+                                clip(first.text),
+                                clip(ty.text)
+                            )
                         };
                         self.warning(ty_span, message);
                         State::Skipping(ty_span)
@@ -444,11 +473,14 @@ impl<'s> Parser<'s> {
                 State::TopLevel
             }
             text if text.contains('=') => {
-                self.warning(span, format!("`{}` is outside any block; the line is ignored", text));
+                self.warning(span, format!("`{}` is outside any block; the line is ignored", clip(text)));
                 State::TopLevel
             }
             text => {
-                self.warning(span, format!("unknown block `{text}`; its lines up to `end` are skipped"));
+                self.warning(
+                    span,
+                    format!("unknown block `{}`; its lines up to `end` are skipped", clip(text)),
+                );
                 State::Skipping(span)
             }
         }
@@ -470,17 +502,17 @@ impl<'s> Parser<'s> {
                 Some(second) if second.text.starts_with('=') => {
                     self.warning(
                         Span { line, column: first.column, len: second.column + 1 - first.column },
-                        format!("write `{}=` with no space before `=`", first.text),
+                        format!("write `{}=` with no space before `=`", clip(first.text)),
                     );
                     (first.text, first.len, &second.text[1..], &tokens[2..])
                 }
                 _ => {
-                    self.error(first.span(line), format!("expected `key= value`, found `{}`", first.text))
-                        .notes
-                        .push(format!(
-                            "inside the `{}` block opened at line {}",
-                            block.kind, block.header.line
-                        ));
+                    self.error(
+                        first.span(line),
+                        format!("expected `key= value`, found `{}`", clip(first.text)),
+                    )
+                    .notes
+                    .push(format!("inside the `{}` block opened at line {}", block.kind, block.header.line));
                     return;
                 }
             },
@@ -515,7 +547,7 @@ impl<'s> Parser<'s> {
                 let earlier = block.entries[previous].key_span.line;
                 self.warning(
                     key_span,
-                    format!("`{key}=` is given again; this value replaces the one on line {earlier}"),
+                    format!("`{}=` is given again; this value replaces the one on line {earlier}", clip(key)),
                 );
                 block.entries[previous] = entry;
             }

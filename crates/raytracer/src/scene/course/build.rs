@@ -12,7 +12,7 @@ use super::{
     MAX_EMITTED_PHOTONS, MAX_IMAGE_SIDE, MAX_ITERATIONS, MAX_QUALITY, MAX_SAMPLE_PHOTONS, MAX_STORED_PHOTONS,
     aspect_mismatch, check_image_size,
 };
-use crate::base::diagnostic::Severity;
+use crate::base::diagnostic::{Severity, clip};
 use crate::base::source::Span;
 use crate::geometry::{Bezier, Cylinder, MeshFile, MeshTransform, Plane, Shape, Sphere, Square, Triangle};
 use crate::light::Light;
@@ -114,7 +114,7 @@ impl<'p, 's> BlockReader<'p, 's> {
                 Some(a) => cam.algorithm = Some((a, self.parser.source.location(span))),
                 None => {
                     let expected = Algorithm::NAMES.map(|n| format!("`{n}`")).join(", ");
-                    self.error(span, format!("unknown `algorithm=` `{name}`"))
+                    self.error(span, format!("unknown `algorithm=` `{}`", clip(&name)))
                         .notes
                         .push(format!("expected one of {expected}"));
                 }
@@ -257,7 +257,7 @@ impl<'p, 's> BlockReader<'p, 's> {
         {
             self.warning(
                 span,
-                format!("unknown `blur= {blur}`; `exp` is the only distribution, and it is used"),
+                format!("unknown `blur= {}`; `exp` is the only distribution, and it is used", clip(&blur)),
             );
         }
         m.texture = self.texture_ref("texture");
@@ -494,7 +494,10 @@ impl<'p, 's> BlockReader<'p, 's> {
                 match text.parse::<f64>() {
                     Ok(v) if v.is_finite() => values.push(v),
                     _ => {
-                        self.error(*span, format!("`P=` expects 2 numbers (z r); `{text}` is not a number"));
+                        self.error(
+                            *span,
+                            format!("`P=` expects 2 numbers (z r); `{}` is not a number", clip(text)),
+                        );
                         bad = true;
                     }
                 }

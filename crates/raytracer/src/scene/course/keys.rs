@@ -4,7 +4,7 @@
 use glam::DVec3;
 
 use super::blocks::{BEZIER_POINT_KEY, BlockKind, Entry, OpenBlock, Parser, PrimitiveKind, known_keys};
-use crate::base::diagnostic::Diagnostic;
+use crate::base::diagnostic::{Diagnostic, clip};
 use crate::base::error::GeometryError;
 use crate::base::source::Span;
 
@@ -105,11 +105,14 @@ impl<'p, 's> BlockReader<'p, 's> {
             match text.parse::<f64>() {
                 Ok(v) if v.is_finite() => *slot = v,
                 Ok(_) => {
-                    self.error(span, format!("`{text}` is not a finite number"));
+                    self.error(span, format!("`{}` is not a finite number", clip(text)));
                     bad = true;
                 }
                 Err(_) => {
-                    self.error(span, format!("`{key}=` expects {}; `{text}` is not a number", what()));
+                    self.error(
+                        span,
+                        format!("`{key}=` expects {}; `{}` is not a number", what(), clip(text)),
+                    );
                     bad = true;
                 }
             }
@@ -231,7 +234,8 @@ impl<'p, 's> BlockReader<'p, 's> {
         unknown.sort_by_key(|e| (e.key_span.line, e.key_span.column));
         for e in unknown {
             let known = known_keys(kind);
-            let d = parser.warning(e.key_span, format!("unknown key `{}=` in `{kind}`; ignored", e.key));
+            let d =
+                parser.warning(e.key_span, format!("unknown key `{}=` in `{kind}`; ignored", clip(e.key)));
             if let Some(k) = known.iter().find(|k| k.eq_ignore_ascii_case(e.key)) {
                 d.notes.push(format!("did you mean `{k}=`? keys are case-sensitive"));
             } else {

@@ -966,3 +966,74 @@ fn large_files_with_problems_are_reported_as_line_by_line() {
         assert_eq!(from_parse, expected, "{extra}");
     }
 }
+
+#[test]
+fn nomal_ball_and_nomal_plane_are_normal_mapped_sphere_and_plane() {
+    // LuChengTHU's renderer names its normal-mapped shapes so (spelled so); `obj` works too.
+    let text = "primitive NomalBall\n O= 1 2 3\n R= 0.5\n De= 1 0 0\n Dc= 0 0 1\n NT= builtin:stripes:4\nend\n\
+                obj NomalPlane\n N= 0 0 1\n R= -1\n Dx= 2 0 0\n Dy= 0 2 0\n NT= waves.bmp\nend\n";
+    let parsed = ok(text);
+    let prims = &parsed.scene.primitives;
+    assert_eq!(prims.len(), 2);
+    match &prims[0].shape {
+        Shape::Sphere(s) => {
+            assert_eq!((s.centre, s.radius), (DVec3::new(1.0, 2.0, 3.0), 0.5));
+            assert_eq!((s.pole(), s.seam()), (DVec3::X, DVec3::Z), "the texture frame from De= and Dc=");
+        }
+        other => panic!("expected a sphere, got {other:?}"),
+    }
+    assert_eq!(
+        prims[0].material.bump.as_ref().map(|t| t.source.clone()),
+        Some(TextureSource::Builtin(Builtin::Stripes(4)))
+    );
+    assert!(matches!(prims[1].shape, Shape::Plane(_)), "{:?}", prims[1].shape);
+    assert_eq!(
+        prims[1].material.bump.as_ref().map(|t| t.source.clone()),
+        Some(TextureSource::File("waves.bmp".into()))
+    );
+    // One note at each type name, saying what it is read as.
+    let notes: Vec<_> = parsed.diagnostics.iter().filter(|d| d.severity == Severity::Note).collect();
+    assert_eq!(notes.len(), 2, "{notes:#?}");
+    let at = |d: &Diagnostic| d.location.as_ref().map(|l| (l.span.line, l.span.column));
+    assert_eq!(at(notes[0]), Some((1, 11)));
+    assert_eq!(notes[0].message, "`primitive NomalBall` is read as `primitive sphere`");
+    assert!(notes[0].notes[0].contains("normal map `NT=`"), "{:?}", notes[0].notes);
+    assert_eq!(at(notes[1]), Some((8, 5)));
+    assert_eq!(notes[1].message, "`obj NomalPlane` is read as `primitive plane`");
+    // Nothing else is reported: the keys are those of a sphere and a plane.
+    assert_eq!(parsed.diagnostics.len(), 2, "{:#?}", parsed.diagnostics);
+    // The names are case-sensitive, as the other types are; a light is not a NomalBall.
+    let d = diagnostics("primitive nomalball\n O= 0 0 0\n R= 1\nend\nlight NomalBall\n O= 0 0 0\nend\n");
+    assert!(d[0].3.starts_with("unknown primitive type `nomalball`"), "{d:?}");
+    assert!(d[1].3.starts_with("unknown light type `NomalBall`"), "{d:?}");
+    // A NomalBall's keys are checked as a sphere's.
+    let (line, _, message) = single_error("primitive NomalBall\n O= 0 0 0\nend\n");
+    assert_eq!(line, 1);
+    assert!(message.contains("needs `R=`"), "{message}");
+}
+
+#[test]
+fn quoted_tokens_are_cut_in_messages() {
+    // A line of one huge token (a file of NULs is one): every message quotes at most
+    // MAX_QUOTED_CHARS characters of it, and the location keeps a bounded part of the line.
+    let token = "\0".repeat(1 << 20);
+    let text = format!(
+        "{token}\n{SPHERE}primitive {token}\nend\nprimitive sphere\n O= {token} 0 0\n R= 1\n {token}= 1\nend\n"
+    );
+    let error = parse(&source(&text)).expect_err("errors");
+    let limit = crate::base::diagnostic::MAX_QUOTED_CHARS;
+    for d in &error.diagnostics {
+        assert!(d.message.len() < 3 * limit + 200, "{} bytes: {:.200}", d.message.len(), d.message);
+        let kept = d.location.as_ref().map_or(0, |l| l.line_text.len());
+        assert!(kept <= crate::base::diagnostic::MAX_KEPT_LINE_CHARS, "{kept}");
+    }
+    let messages: Vec<&str> = error.diagnostics.iter().map(|d| d.message.as_str()).collect();
+    let cut = format!("`{}...`", "\0".repeat(limit));
+    assert!(messages[0].starts_with(&format!("unknown block {cut}")), "{:?}", &messages[0][..80]);
+    assert!(messages.iter().any(|m| m.starts_with(&format!("unknown primitive type {cut}"))), "{messages:?}");
+    assert!(messages.iter().any(|m| m.contains(&format!("; {cut} is not a number"))), "{messages:?}");
+    assert!(messages.iter().any(|m| m.starts_with(&format!("unknown key `{}...=`", "\0".repeat(limit)))));
+    // Printed, the whole report stays small.
+    let printed = error.to_string();
+    assert!(printed.len() < 20_000, "{} bytes", printed.len());
+}

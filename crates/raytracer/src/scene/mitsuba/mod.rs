@@ -150,7 +150,7 @@ impl Document {
     pub fn location(&self, pos: Pos) -> Location {
         match self.files.get(pos.file as usize) {
             Some(file) => file.location(pos.span),
-            None => Location { file: String::new(), span: pos.span, line_text: String::new() },
+            None => Location::new(String::new(), pos.span, ""),
         }
     }
 
