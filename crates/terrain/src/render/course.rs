@@ -171,7 +171,7 @@ impl Renderer {
                 course.sky.draw(&mut pass, frame, mirrored_pass);
             }
         }
-        if budget.take() {
+        if budget.take() && self.config.sea {
             course.water.draw(&mut pass, direct);
         }
     }

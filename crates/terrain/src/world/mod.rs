@@ -5,6 +5,7 @@
 //! Nothing here touches the GPU: every function is pure and unit-tested.
 
 pub mod assets;
+pub mod dem;
 pub mod export;
 pub mod heightfield;
 pub mod heightmap;
@@ -167,6 +168,9 @@ pub struct World {
     /// the modern look, which lights the scene itself (the procedural world has them; images
     /// from elsewhere are used as they are).
     pub unlit: Option<UnlitLayers>,
+    /// What the world keeps of the elevation data it was made from (metres, water, the mask of
+    /// the samples the file had no data for), for worlds made from a DEM ([`dem`]).
+    pub elevation: Option<dem::place::ElevationInfo>,
 }
 
 /// Layers of a world without the light painted into them.
@@ -196,12 +200,14 @@ impl World {
         let sky = |sky: &SkyBox| sky.faces().iter().map(|face| image(face)).sum::<usize>();
         let heights = self.heightmap.levels().len() * self.heightmap.bytes_per_sample();
         let unlit = self.unlit.as_ref().map_or(0, |u| image(&u.albedo_map) + sky(&u.sky));
+        let voids = self.elevation.as_ref().map_or(0, |e| e.voids.len());
         heights
             + image(&self.colour_map)
             + image(&self.detail_map)
             + sky(&self.sky)
             + image(&self.water)
             + unlit
+            + voids
     }
 }
 
