@@ -240,7 +240,7 @@ impl Renderer {
                 modern.sky.draw(&mut pass, mirrored, true);
             }
         }
-        let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view());
+        let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view(), self.clear);
         if budget.take() {
             pass.set_pipeline(&land[0]);
             pass.set_bind_group(0, direct, &[]);

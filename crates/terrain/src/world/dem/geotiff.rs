@@ -354,3 +354,390 @@ impl GeoKeys {
         keys
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype};
+    use tiff::tags::Predictor;
+
+    const LIMIT: SizeLimit = SizeLimit { allow_downsampling: false };
+
+    /// GeoKeys: projected UTM 33N in metres, or geographic WGS 84.
+    const PROJECTED: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 1, 3072, 0, 1, 32633];
+    const GEOGRAPHIC: [u16; 12] = [1, 1, 0, 2, 1024, 0, 1, 2, 2048, 0, 1, 4326];
+
+    /// A 5 x 4 strip TIFF of `values` written by the tiff crate's encoder, with a 30 m projected
+    /// grid's tags and `nodata`.
+    fn encoded<C: colortype::ColorType>(
+        values: &[C::Inner],
+        compression: Compression,
+        predictor: Predictor,
+        nodata: Option<&str>,
+    ) -> Vec<u8>
+    where
+        [C::Inner]: tiff::encoder::TiffValue,
+    {
+        let mut bytes = Cursor::new(Vec::new());
+        let mut encoder = TiffEncoder::new(&mut bytes)
+            .expect("encoder")
+            .with_compression(compression)
+            .with_predictor(predictor);
+        let mut image = encoder.new_image::<C>(5, 4).expect("image");
+        image.rows_per_strip(3).expect("strips");
+        let dir = image.encoder();
+        dir.write_tag(Tag::ModelPixelScaleTag, &[30.0f64, 30.0, 0.0][..]).expect("tag");
+        dir.write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 500_000.0, 7_000_000.0, 0.0][..])
+            .expect("tag");
+        dir.write_tag(Tag::GeoKeyDirectoryTag, &PROJECTED[..]).expect("tag");
+        if let Some(nodata) = nodata {
+            dir.write_tag(Tag::Unknown(GDAL_NODATA), nodata).expect("tag");
+        }
+        image.write_data(values).expect("data");
+        bytes.into_inner()
+    }
+
+    fn compressions() -> [(Compression, &'static str); 4] {
+        [
+            (Compression::Uncompressed, "uncompressed"),
+            (Compression::Lzw, "LZW"),
+            (Compression::Deflate(DeflateLevel::Fast), "Deflate"),
+            (Compression::Packbits, "PackBits"),
+        ]
+    }
+
+    fn expected(nodata_at: Option<usize>) -> Vec<f32> {
+        (0..20).map(|i| if Some(i) == nodata_at { f32::NAN } else { (i * 7 % 23) as f32 }).collect()
+    }
+
+    fn same(a: &[f32], b: &[f32]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x == y || (x.is_nan() && y.is_nan()))
+    }
+
+    #[test]
+    fn every_sample_type_compression_and_horizontal_predictor() {
+        let base: Vec<u32> = (0..20).map(|i| i * 7 % 23).collect();
+        for (compression, compression_name) in compressions() {
+            for predictor in [Predictor::None, Predictor::Horizontal] {
+                let floats = predictor == Predictor::None;
+                let files = [
+                    (
+                        "u8",
+                        Some(encoded::<colortype::Gray8>(
+                            &base.iter().map(|&v| v as u8).collect::<Vec<_>>(),
+                            compression,
+                            predictor,
+                            Some("0"),
+                        )),
+                    ),
+                    (
+                        "i8",
+                        Some(encoded::<colortype::GrayI8>(
+                            &base.iter().map(|&v| v as i8).collect::<Vec<_>>(),
+                            compression,
+                            predictor,
+                            Some("0"),
+                        )),
+                    ),
+                    (
+                        "u16",
+                        Some(encoded::<colortype::Gray16>(
+                            &base.iter().map(|&v| v as u16).collect::<Vec<_>>(),
+                            compression,
+                            predictor,
+                            Some("0"),
+                        )),
+                    ),
+                    (
+                        "i16",
+                        Some(encoded::<colortype::GrayI16>(
+                            &base.iter().map(|&v| v as i16).collect::<Vec<_>>(),
+                            compression,
+                            predictor,
+                            Some("0"),
+                        )),
+                    ),
+                    ("u32", Some(encoded::<colortype::Gray32>(&base, compression, predictor, Some("0")))),
+                    (
+                        "i32",
+                        Some(encoded::<colortype::GrayI32>(
+                            &base.iter().map(|&v| v as i32).collect::<Vec<_>>(),
+                            compression,
+                            predictor,
+                            Some("0"),
+                        )),
+                    ),
+                    // The encoder refuses the horizontal predictor on floats (the real
+                    // Longyearbyen DEM has it: see the tests in crates/terrain/tests/dem.rs).
+                    (
+                        "f32",
+                        floats.then(|| {
+                            encoded::<colortype::Gray32Float>(
+                                &base.iter().map(|&v| v as f32).collect::<Vec<_>>(),
+                                compression,
+                                predictor,
+                                Some("0.0"),
+                            )
+                        }),
+                    ),
+                    (
+                        "f64",
+                        floats.then(|| {
+                            encoded::<colortype::Gray64Float>(
+                                &base.iter().map(|&v| f64::from(v)).collect::<Vec<_>>(),
+                                compression,
+                                predictor,
+                                Some("0"),
+                            )
+                        }),
+                    ),
+                ];
+                for (kind, bytes) in files {
+                    let Some(bytes) = bytes else { continue };
+                    let what = format!("{kind} {compression_name} {predictor:?}");
+                    let dem = read(&bytes, "t.tif", LIMIT).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    assert_eq!((dem.columns, dem.rows), (5, 4), "{what}");
+                    // Sample 0 is 0, the nodata value.
+                    assert!(same(&dem.heights, &expected(Some(0))), "{what}: {:?}", dem.heights);
+                    assert_eq!(dem.spacing, Spacing::Metres { x: 30.0, y: 30.0 }, "{what}");
+                }
+            }
+        }
+    }
+
+    /// A little-endian TIFF built by hand, for what the encoder does not write (tiles, the
+    /// floating-point predictor) and for lies.
+    struct Handmade {
+        width: u32,
+        height: u32,
+        tile: (u32, u32),
+        predictor: u16,
+        /// Tiles to list (default: all); their data is written in order.
+        tiles_listed: Option<usize>,
+        /// Added to every tile offset.
+        offset_shift: u32,
+        geographic: bool,
+    }
+
+    impl Handmade {
+        fn new(width: u32, height: u32, tile: (u32, u32)) -> Self {
+            Self { width, height, tile, predictor: 1, tiles_listed: None, offset_shift: 0, geographic: false }
+        }
+
+        /// Float samples `value(x, y)`, in tiles (padded with zeros), uncompressed.
+        fn bytes(&self, value: impl Fn(u32, u32) -> f32) -> Vec<u8> {
+            let (tw, th) = self.tile;
+            let (across, down) = (self.width.div_ceil(tw), self.height.div_ceil(th));
+            let mut tiles: Vec<Vec<u8>> = Vec::new();
+            for ty in 0..down {
+                for tx in 0..across {
+                    let mut data = Vec::new();
+                    for y in 0..th {
+                        let row: Vec<f32> = (0..tw)
+                            .map(|x| {
+                                let (px, py) = (tx * tw + x, ty * th + y);
+                                if px < self.width && py < self.height { value(px, py) } else { 0.0 }
+                            })
+                            .collect();
+                        data.extend(if self.predictor == 3 { float_predicted(&row) } else { le(&row) });
+                    }
+                    tiles.push(data);
+                }
+            }
+            let listed = self.tiles_listed.unwrap_or(tiles.len());
+            let scale = if self.geographic { [0.001, 0.001, 0.0] } else { [10.0, 10.0, 0.0] };
+            let tie = if self.geographic {
+                [0.0, 0.0, 0.0, 10.0, 60.5, 0.0]
+            } else {
+                [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+            };
+            let keys: &[u16] = if self.geographic { &GEOGRAPHIC } else { &PROJECTED };
+            // Entries: (tag, type, count, value or offset of external data).
+            let mut external: Vec<u8> = Vec::new();
+            let entry_count = 16u32;
+            let ifd_size = 2 + entry_count * 12 + 4;
+            let external_start = 8 + ifd_size;
+            let mut put = |data: &[u8]| {
+                let offset = external_start + external.len() as u32;
+                external.extend_from_slice(data);
+                if external.len() % 2 == 1 {
+                    external.push(0);
+                }
+                offset
+            };
+            let doubles = |v: &[f64]| v.iter().flat_map(|d| d.to_le_bytes()).collect::<Vec<u8>>();
+            let scale_at = put(&doubles(&scale));
+            let tie_at = put(&doubles(&tie));
+            let keys_at = put(&keys.iter().flat_map(|k| k.to_le_bytes()).collect::<Vec<u8>>());
+            let offsets_at = put(&vec![0u8; listed * 4]);
+            let counts_at = put(&tiles
+                .iter()
+                .take(listed)
+                .flat_map(|t| (t.len() as u32).to_le_bytes())
+                .collect::<Vec<u8>>());
+            let data_start = external_start + external.len() as u32;
+            let mut offsets = Vec::new();
+            let mut at = data_start;
+            for tile in tiles.iter().take(listed) {
+                offsets.extend((at + self.offset_shift).to_le_bytes());
+                at += tile.len() as u32;
+            }
+            let o = (offsets_at - external_start) as usize;
+            external[o..o + offsets.len()].copy_from_slice(&offsets);
+            let entries: [(u16, u16, u32, u32); 16] = [
+                (256, 4, 1, self.width),
+                (257, 4, 1, self.height),
+                (258, 3, 1, 32),
+                (259, 3, 1, 1),
+                (262, 3, 1, 1),
+                (277, 3, 1, 1),
+                (284, 3, 1, 1),
+                (317, 3, 1, u32::from(self.predictor)),
+                (322, 4, 1, tw),
+                (323, 4, 1, th),
+                (
+                    324,
+                    4,
+                    listed as u32,
+                    if listed == 1 {
+                        u32::from_le_bytes(offsets[..4].try_into().expect("4"))
+                    } else {
+                        offsets_at
+                    },
+                ),
+                (325, 4, listed as u32, if listed == 1 { tiles[0].len() as u32 } else { counts_at }),
+                (339, 3, 1, 3),
+                (33550, 12, 3, scale_at),
+                (33922, 12, 6, tie_at),
+                (34735, 3, keys.len() as u32, keys_at),
+            ];
+            let mut file = b"II*\0".to_vec();
+            file.extend(8u32.to_le_bytes());
+            file.extend((entries.len() as u16).to_le_bytes());
+            for (tag, kind, count, value) in entries {
+                file.extend(tag.to_le_bytes());
+                file.extend(kind.to_le_bytes());
+                file.extend(count.to_le_bytes());
+                if kind == 3 && count == 1 {
+                    file.extend((value as u16).to_le_bytes());
+                    file.extend([0, 0]);
+                } else {
+                    file.extend(value.to_le_bytes());
+                }
+            }
+            file.extend(0u32.to_le_bytes());
+            file.extend(external);
+            for tile in tiles.iter().take(listed) {
+                file.extend(tile);
+            }
+            file
+        }
+    }
+
+    fn le(row: &[f32]) -> Vec<u8> {
+        row.iter().flat_map(|v| v.to_le_bytes()).collect()
+    }
+
+    /// A row under the floating-point predictor (3): the samples' bytes split into planes, most
+    /// significant first, then differenced byte by byte.
+    fn float_predicted(row: &[f32]) -> Vec<u8> {
+        let n = row.len();
+        let mut planes = vec![0u8; n * 4];
+        for (i, v) in row.iter().enumerate() {
+            for (b, byte) in v.to_be_bytes().into_iter().enumerate() {
+                planes[b * n + i] = byte;
+            }
+        }
+        for k in (1..planes.len()).rev() {
+            planes[k] = planes[k].wrapping_sub(planes[k - 1]);
+        }
+        planes
+    }
+
+    fn ramp(x: u32, y: u32) -> f32 {
+        1000.0 + x as f32 * 1.5 - y as f32 * 0.25
+    }
+
+    #[test]
+    fn tiles_with_and_without_the_floating_point_predictor() {
+        for predictor in [1, 3] {
+            let mut file = Handmade::new(37, 21, (16, 16));
+            file.predictor = predictor;
+            let dem = read(&file.bytes(ramp), "tiled.tif", LIMIT).expect("valid");
+            assert_eq!((dem.columns, dem.rows), (37, 21));
+            let want: Vec<f32> = (0..21 * 37).map(|i| ramp(i % 37, i / 37)).collect();
+            assert_eq!(dem.heights, want, "predictor {predictor}");
+            assert_eq!(dem.spacing, Spacing::Metres { x: 10.0, y: 10.0 });
+        }
+    }
+
+    #[test]
+    fn geographic_grids_give_degrees_at_their_latitude() {
+        let mut file = Handmade::new(32, 20, (16, 16));
+        file.geographic = true;
+        let dem = read(&file.bytes(ramp), "geo.tif", LIMIT).expect("valid");
+        let Spacing::Degrees { longitude, latitude, centre_latitude } = dem.spacing else {
+            panic!("{:?}", dem.spacing)
+        };
+        assert_eq!((longitude, latitude), (0.001, 0.001));
+        assert!((centre_latitude - 60.49).abs() < 1e-9, "{centre_latitude}");
+        // At 60.5 N a degree of longitude is about half a degree of latitude.
+        let (x, y) = dem.spacing.metres().expect("metres");
+        assert!((x / y - 0.4935).abs() < 0.01, "{x} {y}");
+    }
+
+    #[test]
+    fn lies_are_refused_naming_the_file_and_tile() {
+        let mut missing = Handmade::new(37, 21, (16, 16));
+        missing.tiles_listed = Some(4);
+        let error = read(&missing.bytes(ramp), "few.tif", LIMIT).expect_err("tile count").to_string();
+        // The tiff crate itself finds this one while reading the directory.
+        assert!(error.starts_with("few.tif: ") && error.contains("inconsistent sizes"), "{error}");
+
+        let mut past = Handmade::new(37, 21, (16, 16));
+        past.offset_shift = 100_000;
+        let error = read(&past.bytes(ramp), "past.tif", LIMIT).expect_err("past the end").to_string();
+        assert!(
+            error.starts_with("past.tif: tile 0 (tile row 0, column 0")
+                && error.contains("past the end of the file"),
+            "{error}"
+        );
+
+        let huge = Handmade::new(100_000, 100_000, (16, 16)).bytes_header_only();
+        let error = read(&huge, "huge.tif", LIMIT).expect_err("huge").to_string();
+        assert!(
+            error.contains("100000x100000 samples") && error.contains("refused before decoding"),
+            "{error}"
+        );
+        let error =
+            read(&huge, "huge.tif", SizeLimit { allow_downsampling: true }).expect_err("huge").to_string();
+        assert!(error.contains("too large even to downsample"), "{error}");
+
+        let good = Handmade::new(37, 21, (16, 16)).bytes(ramp);
+        for cut in [10, 100, 300, good.len() - 7] {
+            assert!(read(&good[..cut], "cut.tif", LIMIT).is_err(), "cut at {cut}");
+        }
+    }
+
+    impl Handmade {
+        /// A file that declares this size but whose tile table is a single tile (never read:
+        /// the size is refused first).
+        fn bytes_header_only(&self) -> Vec<u8> {
+            let mut small = Handmade::new(self.width, self.height, self.tile);
+            small.tiles_listed = Some(1);
+            // Build the IFD without materialising the declared image: one tile of data.
+            let (tw, th) = self.tile;
+            let tile =
+                Handmade { width: tw, height: th, ..Handmade::new(tw, th, self.tile) }.bytes(|_, _| 0.0);
+            // Patch the width and height entries (the first two, values at bytes 18 and 30) and
+            // the tile's (entries 8 and 9), so that one tile still covers the image.
+            let mut file = tile;
+            file[18..22].copy_from_slice(&self.width.to_le_bytes());
+            file[30..34].copy_from_slice(&self.height.to_le_bytes());
+            file[114..118].copy_from_slice(&self.width.to_le_bytes());
+            file[126..130].copy_from_slice(&self.height.to_le_bytes());
+            let _ = small;
+            file
+        }
+    }
+}
