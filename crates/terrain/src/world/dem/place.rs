@@ -9,10 +9,12 @@
 //! y = 0 and no sea is drawn.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use super::Prepared;
 use crate::camera::CameraPose;
 use crate::config::SceneConfig;
+use crate::world::heightmap::sixteen_of_level;
 use crate::world::{Heightmap, HeightmapError};
 
 /// Where the water is, in metres of the data's heights.
@@ -99,7 +101,7 @@ impl ElevationInfo {
 /// levels into world heights, and what the world keeps of the data.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DemScene {
-    /// The heights as grey levels 0..=255 (4 bytes a sample).
+    /// The heights as grey levels 0..=255, kept as 16-bit values (2 bytes a sample).
     pub heightmap: Heightmap,
     /// The course's scene numbers with the height mapping, the sea and the start pose of this
     /// data.
@@ -132,9 +134,14 @@ pub fn place(prepared: Prepared, options: &PlaceOptions) -> Result<DemScene, Hei
     // Grey levels 0..=255 span the data's range (16-bit precision on the GPU).
     let (low, high) = (info.world_height(f64::from(min)), info.world_height(f64::from(max)));
     let unit_height = ((high - low) / 255.0).max(1e-6);
-    let levels: Vec<f32> =
-        heights.iter().map(|&h| (info.world_height(f64::from(h)) - low) / unit_height).collect();
-    let heightmap = Heightmap::new(columns, rows, levels)?;
+    // Kept as 16-bit values (2 bytes a sample, what the GPU's height texture holds anyway):
+    // 65535 steps over the data's range.
+    let values: Vec<u16> = heights
+        .par_iter()
+        .map(|&h| sixteen_of_level((info.world_height(f64::from(h)) - low) / unit_height))
+        .collect();
+    drop(heights);
+    let heightmap = Heightmap::from_sixteen_bit(columns, rows, values)?;
     let mut config = SceneConfig { unit_height, level_offset: low / unit_height, sea, ..defaults };
     config.camera_start = start_pose(&heightmap, &config);
     Ok(DemScene { heightmap, config, info })
@@ -182,8 +189,10 @@ mod tests {
         assert!(scene.info.sea);
         assert_eq!(scene.info.metres_per_unit, 20.0);
         let height = |column| scene.config.height_of_level(scene.heightmap.level(0, column));
-        assert!((height(0) + 0.5).abs() < 1e-5 && height(1).abs() < 1e-5);
-        assert!((height(3) - 5.0).abs() < 1e-5);
+        // Within a 16-bit step of the range (5.5 / 65535).
+        let step = 5.5 / 65535.0;
+        assert!((height(0) + 0.5).abs() <= step && height(1).abs() <= step, "{} {}", height(0), height(1));
+        assert!((height(3) - 5.0).abs() <= step);
         // The camera starts above the highest ground.
         assert!(scene.config.camera_start.position.y > 5.0);
     }
