@@ -124,6 +124,18 @@ fn broken_elevation_files_are_named_with_exit_one() {
         .expect("write");
     assert_fails(&run(&short), 1, &["short.asc", "row 3 is missing"]);
 
+    // A 16-bit PNG whose pixels are 8-bit: the header's bit depth does not match the data.
+    let png = scratch("lying16.png");
+    let grey = image::GrayImage::from_fn(16, 16, |x, y| image::Luma([(x * 16 + y) as u8]));
+    grey.save(&png).expect("write");
+    let mut bytes = std::fs::read(&png).expect("read");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    bytes[24] = 16;
+    let crc = crc32(&bytes[12..29]);
+    bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+    std::fs::write(&png, &bytes).expect("write");
+    assert_fails(&run(&png), 1, &["lying16.png"]);
+
     if let Some(dir) = shared() {
         // A real GeoTIFF cut short: its strips point past the end.
         let whole = std::fs::read(dir.join("vinschgau_f32_lzw_utm32n_nodata.tif")).expect("readable");
@@ -144,4 +156,16 @@ fn elevation_options_are_checked() {
     assert_fails(&args(&["--water-level", "deep"]), 2, &["neither a height in metres nor `none`"]);
     assert_fails(&args(&["--vertical-exaggeration", "0"]), 2, &["not a positive number"]);
     assert_fails(&args(&["--max-size", "9000"]), 2, &["9000"]);
+}
+
+/// PNG's CRC-32 of `bytes`.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = 0xffff_ffffu32;
+    for &byte in bytes {
+        crc ^= u32::from(byte);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 { (crc >> 1) ^ 0xedb8_8320 } else { crc >> 1 };
+        }
+    }
+    !crc
 }

@@ -437,3 +437,71 @@ pub fn load_file(path: &Path, options: &LoadOptions) -> Result<Loaded, DemError>
     let bytes = std::fs::read(path).map_err(|error| DemError::new(&name, format!("cannot read: {error}")))?;
     load_bytes(&bytes, &name, options)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Cursor;
+
+    fn strip_tiff(columns: u32, rows: u32, value: impl Fn(u32, u32) -> f32) -> Vec<u8> {
+        use tiff::encoder::{TiffEncoder, colortype};
+        let data: Vec<f32> = (0..columns * rows).map(|i| value(i % columns, i / columns)).collect();
+        let mut bytes = Cursor::new(Vec::new());
+        let mut encoder = TiffEncoder::new(&mut bytes).expect("encoder");
+        let mut image = encoder.new_image::<colortype::Gray32Float>(columns, rows).expect("image");
+        image.encoder().write_tag(tiff::tags::Tag::ModelPixelScaleTag, &[5.0f64, 5.0, 0.0][..]).expect("tag");
+        image.write_data(&data).expect("data");
+        bytes.into_inner()
+    }
+
+    #[test]
+    fn formats_are_recognised_from_their_content() {
+        assert_eq!(detect(&strip_tiff(2, 2, |_, _| 0.0), "x.png"), Some(DemFormat::GeoTiff));
+        assert_eq!(detect(b"  NCOLS 4\n", "x"), Some(DemFormat::AsciiGrid));
+        assert_eq!(detect(&[0x76, 0x2f, 0x31, 0x01, 0], "x.tif"), Some(DemFormat::Exr));
+        assert_eq!(detect(&vec![0; 1201 * 1201 * 2], "tile"), Some(DemFormat::Hgt));
+        assert_eq!(detect(&[0; 10], "N00E000.hgt"), Some(DemFormat::Hgt));
+        assert_eq!(detect(b"\x89PNG\r\n\x1a\n", "x.hgt"), None);
+        assert_eq!(detect(b"BM....", "heightmap.bmp"), None);
+    }
+
+    #[test]
+    fn larger_than_the_limit_is_refused_or_downsampled_on_request() {
+        let side = MAX_HEIGHTMAP_SIDE + 7;
+        let bytes = strip_tiff(side, 3, |x, _| x as f32);
+        let error =
+            load_bytes(&bytes, "wide.tif", &LoadOptions::default()).expect_err("too wide").to_string();
+        assert!(error.contains("refused before decoding (pass --max-size N"), "{error}");
+        let options = LoadOptions { max_size: Some(1000), ..LoadOptions::default() };
+        let loaded = load_bytes(&bytes, "wide.tif", &options).expect("downsampled");
+        assert_eq!((loaded.scene.heightmap.columns(), loaded.scene.heightmap.rows()), (1000, 2));
+        assert!(
+            loaded.describe().contains(&format!("downsampled from {side}x3 to 1000x2")),
+            "{}",
+            loaded.describe()
+        );
+        assert!((loaded.scene.info.cell_size_metres - 5.0 * f64::from(side) / 1000.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn openexr_heights_are_metres_with_the_given_cell_size() {
+        let image = image::Rgb32FImage::from_fn(3, 2, |x, y| image::Rgb([x as f32 * 10.0 + y as f32; 3]));
+        let mut bytes = Cursor::new(Vec::new());
+        image::DynamicImage::ImageRgb32F(image)
+            .write_to(&mut bytes, image::ImageFormat::OpenExr)
+            .expect("exr");
+        let options = LoadOptions { cell_size: Some(2.5), ..LoadOptions::default() };
+        let loaded = load_bytes(bytes.get_ref(), "h.exr", &options).expect("readable");
+        assert_eq!(loaded.format, DemFormat::Exr);
+        assert!(loaded.cell_size_given);
+        assert_eq!(loaded.scene.info.cell_size_metres, 2.5);
+        assert_eq!(loaded.scene.info.range_metres, (0.0, 21.0));
+    }
+
+    #[test]
+    fn a_grid_with_no_data_at_all_is_refused() {
+        let text = "ncols 2\nnrows 2\ncellsize 1\nNODATA_value 7\n7 7\n7 7\n";
+        let error = load_bytes(text.as_bytes(), "empty.asc", &LoadOptions::default()).expect_err("no data");
+        assert_eq!(error.to_string(), "empty.asc: every sample is nodata: there is no height to draw");
+    }
+}
