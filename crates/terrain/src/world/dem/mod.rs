@@ -129,32 +129,35 @@ pub enum DemFormat {
 /// which have no header); `None` for anything else (images such as PNG or BMP included, which
 /// the greyscale heightmap path reads).
 pub fn detect(bytes: &[u8], name: &str) -> Option<DemFormat> {
-    if bytes.starts_with(b"II*\0")
-        || bytes.starts_with(b"MM\0*")
-        || bytes.starts_with(b"II+\0")
-        || bytes.starts_with(b"MM\0+")
+    detect_from_head(bytes, bytes.len() as u64, name)
+}
+
+/// [`detect`] from the first bytes of a file (a kilobyte is enough) and its full length.
+pub fn detect_from_head(head: &[u8], length: u64, name: &str) -> Option<DemFormat> {
+    if head.starts_with(b"II*\0")
+        || head.starts_with(b"MM\0*")
+        || head.starts_with(b"II+\0")
+        || head.starts_with(b"MM\0+")
     {
         return Some(DemFormat::GeoTiff);
     }
-    if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+    if head.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
         return Some(DemFormat::Exr);
     }
-    if ascii_grid::looks_like(bytes) {
+    if ascii_grid::looks_like(head) {
         return Some(DemFormat::AsciiGrid);
     }
-    let known_image = bytes.starts_with(b"\x89PNG")
-        || bytes.starts_with(b"BM")
-        || bytes.starts_with(&[0xff, 0xd8])
-        || bytes.starts_with(b"#?RADIANCE")
-        || bytes.starts_with(b"#?RGBE");
+    let known_image = head.starts_with(b"\x89PNG")
+        || head.starts_with(b"BM")
+        || head.starts_with(&[0xff, 0xd8])
+        || head.starts_with(b"#?RADIANCE")
+        || head.starts_with(b"#?RGBE");
     if known_image {
         return None;
     }
     let is_hgt_name = Path::new(name).extension().is_some_and(|e| e.eq_ignore_ascii_case("hgt"));
-    if hgt::side_of_length(bytes.len()).is_some() || is_hgt_name {
-        return Some(DemFormat::Hgt);
-    }
-    None
+    let hgt_length = usize::try_from(length).ok().and_then(hgt::side_of_length).is_some();
+    (hgt_length || is_hgt_name).then_some(DemFormat::Hgt)
 }
 
 /// Whether a file's name or first bytes make it elevation data rather than an image; reads at
@@ -166,10 +169,7 @@ pub fn is_elevation_file(path: &Path) -> std::io::Result<bool> {
     let mut head = Vec::with_capacity(1024);
     file.take(1024).read_to_end(&mut head)?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    if detect(&head, &name).is_some() {
-        return Ok(true);
-    }
-    Ok(usize::try_from(length).ok().and_then(hgt::side_of_length).is_some() && !head.starts_with(b"\x89PNG"))
+    Ok(detect_from_head(&head, length, &name).is_some())
 }
 
 /// Reads elevation data of any [`DemFormat`] from its bytes (`name` names it in messages and
@@ -463,6 +463,9 @@ mod tests {
         assert_eq!(detect(&[0; 10], "N00E000.hgt"), Some(DemFormat::Hgt));
         assert_eq!(detect(b"\x89PNG\r\n\x1a\n", "x.hgt"), None);
         assert_eq!(detect(b"BM....", "heightmap.bmp"), None);
+        // A BMP as long as an SRTM tile is still a BMP.
+        assert_eq!(detect_from_head(b"BM....", 1201 * 1201 * 2, "heightmap.bmp"), None);
+        assert_eq!(detect_from_head(&[1, 2, 3], 3601 * 3601 * 2, "tile"), Some(DemFormat::Hgt));
     }
 
     #[test]

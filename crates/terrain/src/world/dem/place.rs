@@ -81,7 +81,8 @@ pub struct ElevationInfo {
     /// The lowest and highest heights, in metres (voids filled).
     pub range_metres: (f32, f32),
     /// `true` for samples the file had no data for (filled from their neighbours), row by row
-    /// from the northern (far, -z) row, as the heightmap.
+    /// from the northern (far, -z) row, as the heightmap; empty when the file had no void (no
+    /// byte a sample spent on nothing).
     pub voids: Vec<bool>,
 }
 
@@ -89,6 +90,11 @@ impl ElevationInfo {
     /// Number of void samples.
     pub fn void_count(&self) -> usize {
         self.voids.iter().filter(|&&v| v).count()
+    }
+
+    /// Whether sample `index` (row by row from the northern row) was a void.
+    pub fn is_void(&self, index: usize) -> bool {
+        self.voids.get(index).copied().unwrap_or(false)
     }
 
     /// World height (y) of a height in metres.
@@ -122,6 +128,7 @@ pub fn place(prepared: Prepared, options: &PlaceOptions) -> Result<DemScene, Hei
         _ => (false, f64::from(min)),
     };
     let exaggeration = options.vertical_exaggeration;
+    let voids = if voids.contains(&true) { voids } else { Vec::new() };
     let info = ElevationInfo {
         cell_size_metres: cell_size,
         metres_per_unit,
