@@ -26,6 +26,7 @@ fn after_help() -> String {
     format!(
         "Controls:\n{}\nExamples:\n  rayterra terrain\n  rayterra terrain --seed 3\n  \
          rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  \
+         rayterra terrain --heightmap N42E001.hgt --water-level 1500\n  \
          rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3\n  \
          rayterra terrain --look course\n  rayterra terrain --settings sunset.toml --screenshot sunset.png",
         controls::help()

@@ -129,6 +129,7 @@ fn every_shared_dem_reads_with_its_known_size_range_and_spacing() {
         let loaded =
             dem::load_file(&path, &dem::LoadOptions::default()).unwrap_or_else(|error| panic!("{error}"));
         let info = &loaded.scene.info;
+        assert_eq!(loaded.source_voids, dem.heights.len() - finite.len(), "{name}");
         assert!(
             info.range_metres.0 >= low - 0.01 && info.range_metres.1 <= high + 0.01,
             "{name}: {:?}",

@@ -283,6 +283,8 @@ pub struct Prepared {
     pub cell_size_given: bool,
     /// Why the grid was resampled, if it was (non-square cells, `--max-size`).
     pub resampled: Option<String>,
+    /// Samples without data in the file (before any resampling).
+    pub source_voids: usize,
 }
 
 /// Makes `elevation` ready for the terrain: voids filled from their neighbours (and kept in a
@@ -298,6 +300,7 @@ pub fn prepare(
     let max_side = max_side.clamp(2, MAX_HEIGHTMAP_SIDE);
     let (filled, voids) = fill::fill_voids(columns, rows, heights)
         .ok_or_else(|| DemError::new(name, "every sample is nodata: there is no height to draw"))?;
+    let source_voids = voids.iter().filter(|&&v| v).count();
     let (metres, cell_size_given) = match spacing.metres() {
         Some(metres) => (metres, false),
         None => {
@@ -331,6 +334,7 @@ pub fn prepare(
         source_size: (columns, rows),
         cell_size_given,
         resampled: None,
+        source_voids,
     };
     let square = ((dx - dy) / dx).abs() < 1e-3;
     if (new_columns, new_rows) != (columns, rows) && !(square && columns <= max_side && rows <= max_side) {
@@ -379,6 +383,8 @@ pub struct Loaded {
     pub cell_size_given: bool,
     /// Why it was resampled, if it was.
     pub resampled: Option<String>,
+    /// Samples without data in the file (before any resampling).
+    pub source_voids: usize,
 }
 
 impl Loaded {
@@ -396,9 +402,8 @@ impl Loaded {
         if let Some(why) = &self.resampled {
             text += &format!("; {why}");
         }
-        let voids = info.void_count();
-        if voids > 0 {
-            text += &format!("; {voids} nodata samples filled from their neighbours");
+        if self.source_voids > 0 {
+            text += &format!("; {} nodata samples filled from their neighbours", self.source_voids);
         }
         text += &if info.sea {
             format!("; water at {} m", info.base_metres)
@@ -424,11 +429,11 @@ pub fn load_bytes(bytes: &[u8], name: &str, options: &LoadOptions) -> Result<Loa
     let max_side = options.max_size.unwrap_or(MAX_HEIGHTMAP_SIDE);
     let elevation = read(bytes, name, options.max_size.is_some())?;
     let prepared = prepare(elevation, name, options.cell_size, max_side)?;
-    let (source_size, cell_size_given, resampled) =
-        (prepared.source_size, prepared.cell_size_given, prepared.resampled.clone());
+    let (source_size, cell_size_given, resampled, source_voids) =
+        (prepared.source_size, prepared.cell_size_given, prepared.resampled.clone(), prepared.source_voids);
     let scene =
         place::place(prepared, &options.place).map_err(|error| DemError::new(name, error.to_string()))?;
-    Ok(Loaded { scene, format, source_size, cell_size_given, resampled })
+    Ok(Loaded { scene, format, source_size, cell_size_given, resampled, source_voids })
 }
 
 /// [`load_bytes`] on a file, read whole. Errors name the file.

@@ -182,6 +182,7 @@ mod tests {
             source_size: (columns, rows),
             cell_size_given: false,
             resampled: None,
+            source_voids: 0,
         }
     }
 
