@@ -7,6 +7,6 @@ use terrain::world::Heightmap;
 
 fuzz_target!(|bytes: &[u8]| {
     if let Ok(map) = Heightmap::decode(bytes, "fuzz.img") {
-        assert!(map.levels().iter().all(|l| l.is_finite()));
+        assert!(map.levels().all(|l| l.is_finite()));
     }
 });

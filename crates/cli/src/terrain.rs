@@ -10,6 +10,7 @@ use terrain::controls;
 use terrain::headless::HeadlessRenderer;
 use terrain::render::{Backend, FrameView, Gpu, GpuMemory};
 use terrain::window::{self, Notice, WindowOptions};
+use terrain::world::dem::{self, WaterLevel};
 use terrain::world::procedural::{self, ProceduralOptions, Progress, Stage};
 use terrain::world::{self as terrain_world, Heightmap, World};
 use terrain::{Look, SceneConfig, Settings};
@@ -25,6 +26,7 @@ fn after_help() -> String {
     format!(
         "Controls:\n{}\nExamples:\n  rayterra terrain\n  rayterra terrain --seed 3\n  \
          rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  \
+         rayterra terrain --heightmap N42E001.hgt --water-level 1500\n  \
          rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3\n  \
          rayterra terrain --look course\n  rayterra terrain --settings sunset.toml --screenshot sunset.png",
         controls::help()
@@ -42,10 +44,32 @@ pub struct TerrainArgs {
     #[arg(long, value_name = "DIR", conflicts_with_all = ["heightmap", "seed", "grid"])]
     assets: Option<PathBuf>,
 
-    /// Use this greyscale image (8- or 16-bit PNG, BMP, ...; 2 to 8193 pixels a side, square or
-    /// not) as the heightmap, with a colour map painted from its heights and the default sky, detail and water.
+    /// Use this heightmap, with a colour map painted from its heights and the default sky, detail
+    /// and water: elevation data in metres (GeoTIFF, SRTM .hgt, Esri ASCII grid, OpenEXR; see
+    /// docs/terrain-elevation.md) or a greyscale image (8- or 16-bit PNG, BMP, ...) laid out as the
+    /// course's. The format is recognised from the content; 2 to 8193 samples a side.
     #[arg(long, value_name = "FILE", conflicts_with = "grid")]
     heightmap: Option<PathBuf>,
+
+    /// Metres between samples of elevation data whose file does not say (an OpenEXR image, an
+    /// ASCII grid or TIFF without geographic tags). Default: 1.
+    #[arg(long, value_name = "METRES", value_parser = parse_positive)]
+    cell_size: Option<f64>,
+
+    /// Factor on the heights of elevation data (1 keeps the true proportions).
+    #[arg(long, value_name = "X", default_value_t = 1.0, value_parser = parse_positive)]
+    vertical_exaggeration: f64,
+
+    /// Water level of elevation data in metres, or `none` for no water. Land wholly above it has
+    /// no sea. Default: 0 (sea level).
+    #[arg(long, value_name = "METRES|none", allow_hyphen_values = true)]
+    water_level: Option<WaterLevel>,
+
+    /// Downsample elevation data larger than N samples a side to N (2 to 8193); without it larger
+    /// data is refused before it is decoded.
+    #[arg(long, value_name = "N",
+          value_parser = clap::value_parser!(u32).range(2..=i64::from(terrain_world::MAX_HEIGHTMAP_SIDE)))]
+    max_size: Option<u32>,
 
     /// Seed of the procedural world: the same seed always gives the same island, textures and sky.
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -141,6 +165,13 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
     crate::size::parse_size(text, MAX_SIDE)
 }
 
+fn parse_positive(text: &str) -> Result<f64, String> {
+    text.parse::<f64>()
+        .ok()
+        .filter(|value| value.is_finite() && *value > 0.0)
+        .ok_or_else(|| format!("`{text}` is not a positive number"))
+}
+
 fn parse_look(text: &str) -> Result<Look, String> {
     text.parse()
 }
@@ -177,7 +208,6 @@ pub fn run(args: TerrainArgs) -> Result<(), ExitCode> {
 }
 
 fn execute(args: TerrainArgs) -> Result<(), String> {
-    let config = SceneConfig::default();
     let windowed = args.screenshot.is_none() && args.export_assets.is_none();
     // Say so before any work when there is nowhere to open the window.
     if windowed && !window::display_available() {
@@ -188,7 +218,7 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         terrain::output::check_output(out).map_err(|error| error.to_string())?;
     }
     let settings = load_settings(&args)?;
-    let world = load_world(&args, &config)?;
+    let (world, config) = load_world(&args)?;
     if let Some(dir) = &args.export_assets {
         let written = terrain_world::export::save_course_folder(&world, dir).map_err(|e| e.to_string())?;
         outln!("wrote {} files to {}", written.len(), dir.display());
@@ -346,8 +376,66 @@ fn no_display_message(reason: &str) -> String {
     )
 }
 
-/// Loads or generates the world the options ask for, showing progress.
-fn load_world(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String> {
+/// Loads or generates the world the options ask for, showing progress, with the scene numbers
+/// to draw it with (the course's, or those that fit elevation data).
+fn load_world(args: &TerrainArgs) -> Result<(World, SceneConfig), String> {
+    let config = SceneConfig::default();
+    if let Some(path) = &args.heightmap {
+        let elevation = dem::is_elevation_file(path)
+            .map_err(|error| format!("cannot read {}: {error}", path.display()))?;
+        if elevation {
+            return load_elevation(args, path);
+        }
+        let given = [
+            (args.cell_size.is_some(), "--cell-size"),
+            (args.vertical_exaggeration != 1.0, "--vertical-exaggeration"),
+            (args.water_level.is_some(), "--water-level"),
+            (args.max_size.is_some(), "--max-size"),
+        ];
+        for (_, option) in given.iter().filter(|(set, _)| *set) {
+            eprintln!(
+                "warning: {option} applies to elevation data; {} is a greyscale image, laid out as the course's",
+                path.display()
+            );
+        }
+    }
+    load_world_with(args, &config).map(|world| (world, config))
+}
+
+/// Loads elevation data (metres) from `path`, with a colour map painted from its heights.
+fn load_elevation(args: &TerrainArgs, path: &Path) -> Result<(World, SceneConfig), String> {
+    let started = Instant::now();
+    let options = dem::LoadOptions {
+        cell_size: args.cell_size,
+        max_size: args.max_size,
+        place: dem::PlaceOptions {
+            water_level: args.water_level.unwrap_or_default(),
+            vertical_exaggeration: args.vertical_exaggeration,
+        },
+    };
+    let reading = spinner(format!("reading the elevation data {}", path.display()));
+    let loaded = dem::load_file(path, &options);
+    reading.finish_and_clear();
+    let loaded = loaded.map_err(|error| error.to_string())?;
+    let read = started.elapsed();
+    eprintln!("elevation: {} ({})", loaded.describe(), seconds(read));
+    let dem::DemScene { heightmap, config, info } = loaded.scene;
+    let painting = spinner("painting the colour map".to_string());
+    let mut world = procedural::dress_heightmap(heightmap, args.seed, &config, &mut |_| {});
+    painting.finish_and_clear();
+    world.elevation = Some(info);
+    eprintln!(
+        "world: elevation data {}, {}x{} heightmap ({})",
+        path.display(),
+        world.heightmap.columns(),
+        world.heightmap.rows(),
+        seconds(started.elapsed())
+    );
+    Ok((world, config))
+}
+
+/// Loads or generates the world with the course's scene numbers.
+fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String> {
     let started = Instant::now();
     if let Some(dir) = &args.assets {
         let spinner = spinner(format!("loading the course assets from {}", dir.display()));

@@ -36,6 +36,9 @@ pub struct SceneConfig {
     pub near: f32,
     /// Far clipping distance in world units (course: 500).
     pub far: f32,
+    /// Whether the water plane (y = 0) is drawn (course: yes). Elevation data wholly above its
+    /// water level, or with none, has no sea.
+    pub sea: bool,
 }
 
 impl Default for SceneConfig {
@@ -53,6 +56,7 @@ impl Default for SceneConfig {
             field_of_view_degrees: 45.0,
             near: 0.1,
             far: 500.0,
+            sea: true,
         }
     }
 }

@@ -139,7 +139,7 @@ impl Renderer {
     /// water).
     pub(super) fn draw_course(&mut self, encoder: &mut wgpu::CommandEncoder, target: &wgpu::TextureView) {
         let (Some(course), Some(depth)) = (&self.course, &self.depth) else { return };
-        let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view());
+        let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view(), self.clear);
         let [direct, mirrored, _] = &self.frame_groups;
         let mut budget = DrawBudget(self.draw_limit);
         match &course.land {
@@ -171,7 +171,7 @@ impl Renderer {
                 course.sky.draw(&mut pass, frame, mirrored_pass);
             }
         }
-        if budget.take() {
+        if budget.take() && self.config.sea {
             course.water.draw(&mut pass, direct);
         }
     }

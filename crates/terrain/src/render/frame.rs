@@ -62,12 +62,13 @@ pub struct FrameStats {
     pub shadow_map_drawn: bool,
 }
 
-/// Begins the frame's pass into `target` and `depth`, both cleared.
+/// Begins the frame's pass into `target` and `depth`, both cleared (`target` to `clear`).
 pub(super) fn begin_pass<'a>(
     encoder: &'a mut wgpu::CommandEncoder,
     label: &str,
     target: &'a wgpu::TextureView,
     depth: &'a wgpu::TextureView,
+    clear: wgpu::Color,
 ) -> wgpu::RenderPass<'a> {
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
@@ -75,10 +76,7 @@ pub(super) fn begin_pass<'a>(
             view: target,
             depth_slice: None,
             resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                store: wgpu::StoreOp::Store,
-            },
+            ops: wgpu::Operations { load: wgpu::LoadOp::Clear(clear), store: wgpu::StoreOp::Store },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: depth,
@@ -169,4 +167,37 @@ impl Renderer {
         }
         gpu.queue.submit([encoder.finish()]);
     }
+}
+
+/// What the frame is cleared to: black (hidden by the sky and the sea) where there is a sea;
+/// without one, the sky's colour at the horizon (the mean of the sky walls' bottom rows), which
+/// then shows below the horizon beyond the land's edges.
+pub(super) fn clear_colour(config: &crate::config::SceneConfig, world: &crate::world::World) -> wgpu::Color {
+    if config.sea {
+        return wgpu::Color::BLACK;
+    }
+    let sky = world.clear_sky();
+    let mut sum = [0.0f64; 3];
+    let mut count = 0.0;
+    for wall in &sky.sides {
+        if wall.height() == 0 {
+            continue;
+        }
+        let y = wall.height() - 1;
+        for x in 0..wall.width() {
+            let pixel = wall.get_pixel(x, y).0;
+            for (total, &channel) in sum.iter_mut().zip(&pixel[..3]) {
+                *total += srgb_to_linear(f64::from(channel) / 255.0);
+            }
+            count += 1.0;
+        }
+    }
+    if count == 0.0 {
+        return wgpu::Color::BLACK;
+    }
+    wgpu::Color { r: sum[0] / count, g: sum[1] / count, b: sum[2] / count, a: 1.0 }
+}
+
+fn srgb_to_linear(value: f64) -> f64 {
+    if value <= 0.04045 { value / 12.92 } else { ((value + 0.055) / 1.055).powf(2.4) }
 }

@@ -89,6 +89,8 @@ pub enum RenderError {
 #[derive(Debug)]
 pub struct Renderer {
     config: SceneConfig,
+    /// What the frame is cleared to ([`frame::clear_colour`]).
+    clear: wgpu::Color,
     settings: Settings,
     target_format: wgpu::TextureFormat,
     frame_layout: wgpu::BindGroupLayout,
@@ -206,6 +208,7 @@ impl Renderer {
             depth: None,
             stats: FrameStats::default(),
             draw_limit: None,
+            clear: frame::clear_colour(config, world),
         };
         renderer.apply(gpu, world, settings)?;
         Ok(renderer)

@@ -225,7 +225,9 @@ impl Renderer {
         let mut budget = DrawBudget(self.draw_limit);
         // Counted whether or not the water reflects, so that the draws keep their places.
         let (reflected_land, reflected_sky) = (budget.take(), budget.take());
-        if let Some(reflection) = &modern.reflection {
+        // Without a sea nothing shows the reflection.
+        let reflection = modern.reflection.as_ref().filter(|_| self.config.sea);
+        if let Some(reflection) = reflection {
             let mut pass = reflection.begin(encoder);
             if reflected_land {
                 pass.set_pipeline(&land[1]);
@@ -238,7 +240,7 @@ impl Renderer {
                 modern.sky.draw(&mut pass, mirrored, true);
             }
         }
-        let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view());
+        let mut pass = super::frame::begin_pass(encoder, "scene", target, depth.view(), self.clear);
         if budget.take() {
             pass.set_pipeline(&land[0]);
             pass.set_bind_group(0, direct, &[]);
@@ -249,7 +251,7 @@ impl Renderer {
         if budget.take() {
             modern.sky.draw(&mut pass, direct, false);
         }
-        if budget.take() {
+        if budget.take() && self.config.sea {
             modern.sea.draw(&mut pass, direct);
         }
     }

@@ -6,6 +6,7 @@
 
 pub mod assets;
 pub mod chunk;
+pub mod dem;
 pub mod export;
 pub mod heightfield;
 pub mod heightmap;
@@ -168,6 +169,9 @@ pub struct World {
     /// the modern look, which lights the scene itself (the procedural world has them; images
     /// from elsewhere are used as they are).
     pub unlit: Option<UnlitLayers>,
+    /// What the world keeps of the elevation data it was made from (metres, water, the mask of
+    /// the samples the file had no data for), for worlds made from a DEM ([`dem`]).
+    pub elevation: Option<dem::place::ElevationInfo>,
 }
 
 /// Layers of a world without the light painted into them.
@@ -197,12 +201,14 @@ impl World {
         let sky = |sky: &SkyBox| sky.faces().iter().map(|face| image(face)).sum::<usize>();
         let heights = self.heightmap.levels().len() * self.heightmap.bytes_per_sample();
         let unlit = self.unlit.as_ref().map_or(0, |u| image(&u.albedo_map) + sky(&u.sky));
+        let voids = self.elevation.as_ref().map_or(0, |e| e.voids.len());
         heights
             + image(&self.colour_map)
             + image(&self.detail_map)
             + sky(&self.sky)
             + image(&self.water)
             + unlit
+            + voids
     }
 }
 

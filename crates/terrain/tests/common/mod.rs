@@ -121,6 +121,7 @@ pub fn marker_world(detail_grey: u8) -> World {
         sky: SkyBox { sides: [green.clone(), green.clone(), green.clone(), green.clone()], top: green },
         water: flat([0, 0, 255], 8),
         unlit: None,
+        elevation: None,
     }
 }
 

@@ -1,0 +1,241 @@
+//! Every real elevation model in `../shared/terrain-dem/` (see its SOURCES.md) read with its
+//! known size, height range, spacing and voids, then prepared and placed without a spike.
+
+use std::path::{Path, PathBuf};
+
+use terrain::world::dem::{self, Spacing};
+
+/// The shared folder, or `None` after a loud skip (a failure under CI).
+fn shared() -> Option<PathBuf> {
+    // `../shared` beside the repository's root; the nearest such folder above it, so that a git
+    // worktree in a subfolder finds it too.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let found = root
+        .ancestors()
+        .skip(1)
+        .map(|dir| dir.join("shared/terrain-dem"))
+        .find(|dir| dir.join("SOURCES.md").is_file());
+    if let Some(dir) = found {
+        return Some(dir);
+    }
+    let reason =
+        format!("the elevation models are not in shared/terrain-dem beside {} or above it", root.display());
+    assert!(std::env::var("CI").as_deref() != Ok("true"), "CI=true, so this cannot be skipped: {reason}");
+    test_skips::skip("terrain DEM tests", &reason);
+    None
+}
+
+/// What SOURCES.md says of a file.
+struct Known {
+    file: &'static str,
+    size: (u32, u32),
+    /// Lowest and highest heights as SOURCES.md gives them (whole metres).
+    range: (f32, f32),
+    /// Metres between columns and between rows (at the tile's latitude for degrees).
+    metres: (f64, f64),
+    geographic: bool,
+    voids: Option<usize>,
+}
+
+const KNOWN: [Known; 7] = [
+    Known {
+        file: "N42E001.hgt",
+        size: (1201, 1201),
+        range: (349.0, 3100.0),
+        metres: (68.3, 92.6),
+        geographic: true,
+        voids: Some(7652),
+    },
+    // Web Mercator's 4.777 m at the equator, times the cosine of the tile's latitude (8.6 N).
+    Known {
+        file: "mapzen_z14_10348_7801_f32_deflate_pred3_tiled_3857.tif",
+        size: (512, 512),
+        range: (600.0, 646.0),
+        metres: (4.724, 4.724),
+        geographic: false,
+        voids: Some(0),
+    },
+    Known {
+        file: "vinschgau_f32_lzw_utm32n_nodata.tif",
+        size: (252, 194),
+        range: (388.0, 3863.0),
+        metres: (250.0, 250.0),
+        geographic: false,
+        voids: Some(445),
+    },
+    Known {
+        file: "zion_srtm_u16_deflate_epsg4326.tif",
+        size: (465, 457),
+        range: (1024.0, 2892.0),
+        metres: (73.9, 92.5),
+        geographic: true,
+        voids: None,
+    },
+    Known {
+        file: "dallas_i16_tiled16_epsg4326.tif",
+        size: (367, 359),
+        range: (147.0, 298.0),
+        metres: (78.2, 92.4),
+        geographic: true,
+        voids: None,
+    },
+    Known {
+        file: "longyearbyen1995_f32_deflate_pred2_utm33n.tif",
+        size: (1332, 985),
+        range: (8.0, 1022.0),
+        metres: (20.0, 20.0),
+        geographic: false,
+        voids: None,
+    },
+    Known {
+        file: "frontrange_srtmgl3_geographic.asc",
+        size: (240, 144),
+        range: (1943.0, 3286.0),
+        metres: (71.0, 92.5),
+        geographic: true,
+        voids: None,
+    },
+];
+
+#[test]
+fn every_shared_dem_reads_with_its_known_size_range_and_spacing() {
+    let Some(dir) = shared() else { return };
+    for known in &KNOWN {
+        let path = dir.join(known.file);
+        let dem = dem::read_file(&path, false).unwrap_or_else(|error| panic!("{error}"));
+        let name = known.file;
+        assert_eq!((dem.columns, dem.rows), known.size, "{name}");
+        let finite: Vec<f32> = dem.heights.iter().copied().filter(|h| h.is_finite()).collect();
+        let low = finite.iter().copied().fold(f32::INFINITY, f32::min);
+        let high = finite.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        assert!(
+            (low - known.range.0).abs() <= 1.0 && (high - known.range.1).abs() <= 1.0,
+            "{name}: {low}..{high}"
+        );
+        if let Some(voids) = known.voids {
+            assert_eq!(dem.heights.len() - finite.len(), voids, "{name}: voids");
+        }
+        assert_eq!(
+            matches!(dem.spacing, Spacing::Degrees { .. }),
+            known.geographic,
+            "{name}: {:?}",
+            dem.spacing
+        );
+        let (x, y) = dem.spacing.metres().expect("the file states its spacing");
+        let near = |a: f64, b: f64| (a - b).abs() <= 0.005 * b + 0.01;
+        assert!(near(x, known.metres.0) && near(y, known.metres.1), "{name}: {x} x {y} m");
+
+        // Prepared and placed: square cells, no void left, nothing outside the data's range.
+        let loaded =
+            dem::load_file(&path, &dem::LoadOptions::default()).unwrap_or_else(|error| panic!("{error}"));
+        let info = &loaded.scene.info;
+        assert_eq!(loaded.source_voids, dem.heights.len() - finite.len(), "{name}");
+        assert!(
+            info.range_metres.0 >= low - 0.01 && info.range_metres.1 <= high + 0.01,
+            "{name}: {:?}",
+            info.range_metres
+        );
+        assert!(
+            (info.cell_size_metres - x.min(y)).abs() < 0.01 * x.min(y),
+            "{name}: cell {}",
+            info.cell_size_metres
+        );
+        // The mask covers every sample where there were voids, and is empty otherwise.
+        let samples = loaded.scene.heightmap.levels().len();
+        let had_voids = finite.len() < dem.heights.len();
+        assert_eq!(info.voids.len(), if had_voids { samples } else { 0 }, "{name}");
+        assert!(loaded.scene.heightmap.levels().all(|level| (0.0..=255.0).contains(&level)), "{name}");
+        // Every one of these lies above sea level: land, no sea.
+        assert!(!info.sea && !loaded.scene.config.sea, "{name}");
+    }
+}
+
+#[test]
+fn the_pyrenees_tile_starts_with_the_camera_above_its_highest_peak() {
+    let Some(dir) = shared() else { return };
+    let options = dem::LoadOptions {
+        place: dem::PlaceOptions { water_level: dem::WaterLevel::Metres(1500.0), vertical_exaggeration: 1.0 },
+        ..Default::default()
+    };
+    let loaded = dem::load_file(&dir.join("N42E001.hgt"), &options).expect("readable");
+    let scene = &loaded.scene;
+    // A lake at 1500 m: the valleys below it are under water.
+    assert!(scene.config.sea);
+    let top = scene.config.height_of_level(255.0);
+    assert!((top - scene.info.world_height(f64::from(scene.info.range_metres.1))).abs() < 1e-4);
+    assert!(scene.config.camera_start.position.y > top, "{:?}", scene.config.camera_start);
+    assert!(scene.config.camera_start.pitch_degrees < 0.0);
+}
+
+#[test]
+fn downsampling_is_asked_for_and_said() {
+    let Some(dir) = shared() else { return };
+    let options = dem::LoadOptions { max_size: Some(300), ..Default::default() };
+    let loaded = dem::load_file(&dir.join("longyearbyen1995_f32_deflate_pred2_utm33n.tif"), &options)
+        .expect("readable");
+    assert_eq!((loaded.scene.heightmap.columns(), loaded.scene.heightmap.rows()), (300, 222));
+    assert!(loaded.describe().contains("downsampled from 1332x985"), "{}", loaded.describe());
+    assert!((loaded.scene.info.cell_size_metres - 20.0 * 1332.0 / 300.0).abs() < 0.01);
+}
+
+/// An 8193 x 8193 float32 GeoTIFF with Deflate (strips of 8 rows, projected, 2 m cells) of a
+/// rough, non-repeating surface, written with the tiff crate's encoder.
+fn write_big_geotiff(path: &Path, side: u32) {
+    use tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype};
+    use tiff::tags::Tag;
+    let heights: Vec<f32> = (0..side * side)
+        .map(|i| {
+            let (x, y) = ((i % side) as f32, (i / side) as f32);
+            let hash = (i.wrapping_mul(2_654_435_761) >> 16) as f32 / 65536.0;
+            800.0 + 400.0 * (x / 700.0).sin() * (y / 900.0).cos() + 30.0 * (x / 37.0 + y / 53.0).sin() + hash
+        })
+        .collect();
+    let file = std::io::BufWriter::new(std::fs::File::create(path).expect("writable"));
+    let mut encoder =
+        TiffEncoder::new(file).expect("encoder").with_compression(Compression::Deflate(DeflateLevel::Fast));
+    let mut image = encoder.new_image::<colortype::Gray32Float>(side, side).expect("image");
+    image.rows_per_strip(8).expect("strips");
+    let dir = image.encoder();
+    dir.write_tag(Tag::ModelPixelScaleTag, &[2.0f64, 2.0, 0.0][..]).expect("tag");
+    dir.write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 400_000.0, 5_000_000.0, 0.0][..]).expect("tag");
+    dir.write_tag(Tag::GeoKeyDirectoryTag, &[1u16, 1, 0, 1, 1024, 0, 1, 1][..]).expect("tag");
+    image.write_data(&heights).expect("data");
+}
+
+/// Measures loading an 8193 x 8193 float32 Deflate GeoTIFF (run it with `--ignored`, in release
+/// for the real figure: `cargo test --release -p terrain --test dem -- --ignored --nocapture`).
+#[test]
+#[ignore = "writes a 200 MB file; a measurement, run by hand"]
+fn an_8193_float_deflate_geotiff_loads_in_under_ten_seconds() {
+    let side = 8193;
+    let dir = tempfile::tempdir().expect("temp dir");
+    // RAYTERRA_KEEP_BIG_TIFF=FILE keeps the file there (to time `rayterra terrain` on it).
+    let kept = std::env::var_os("RAYTERRA_KEEP_BIG_TIFF").map(PathBuf::from);
+    let path = kept.clone().unwrap_or_else(|| dir.path().join("big.tif"));
+    let started = std::time::Instant::now();
+    write_big_geotiff(&path, side);
+    let bytes = std::fs::metadata(&path).expect("written").len();
+    eprintln!(
+        "wrote {side}x{side} float32 Deflate GeoTIFF, {:.1} MB, in {:.2} s",
+        bytes as f64 / 1e6,
+        started.elapsed().as_secs_f64()
+    );
+    let started = std::time::Instant::now();
+    let elevation = dem::read_file(&path, false).expect("readable");
+    let read = started.elapsed().as_secs_f64();
+    assert_eq!((elevation.columns, elevation.rows), (side, side));
+    drop(elevation);
+    let started = std::time::Instant::now();
+    let loaded = dem::load_file(&path, &dem::LoadOptions::default()).expect("loadable");
+    let load = started.elapsed().as_secs_f64();
+    eprintln!(
+        "read (decode only) {read:.2} s; read, fill, place {load:.2} s on {} threads: {}",
+        rayon::current_num_threads(),
+        loaded.describe()
+    );
+    assert_eq!(loaded.scene.heightmap.bytes_per_sample(), 2);
+    assert!(load < 10.0, "{load} s");
+    if kept.is_none() {
+        let _ = std::fs::remove_file(&path);
+    }
+}
