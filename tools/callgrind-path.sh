@@ -21,6 +21,7 @@ out="target/callgrind/path.$(date +%Y%m%d-%H%M%S).out"
 valgrind --tool=callgrind --callgrind-out-file="$out" \
     target/release/rayterra render "$scene" --model path --size 64x64 --spp 4 --threads 1 \
     -o target/callgrind/path.exr "$@" >/dev/null 2>target/callgrind/valgrind.log
-total=$(callgrind_annotate "$out" 2>/dev/null | awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1; exit }')
+annotated=$(callgrind_annotate "$out")
+total=$(awk '/PROGRAM TOTALS/ && !done { gsub(",", "", $1); print $1; done = 1 }' <<<"$annotated")
 echo "instructions: $total  ($scene, path model, 64x64, 4 spp, 1 thread; profile: $out)"
-callgrind_annotate "$out" 2>/dev/null | awk '/file:function/ { on = 1; next } on && NF { print; if (++n == 10) exit }'
+awk '/file:function/ { on = 1; next } on && NF && !/^-+$/ && n < 10 { print; n++ }' <<<"$annotated"
