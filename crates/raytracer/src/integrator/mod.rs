@@ -1,12 +1,15 @@
-//! Light-transport models, one module each, over shared sampling code:
-//! - [`classic`]: the course template's model (spec section 5), the default for course files;
-//! - [`photon`]: the course's photon mapper (spec section 10), over the [`photon_map`];
-//! - [`path`]: the physically based path tracer (spec section 11);
+//! Light-transport models, one module each, each with its own row loop, over shared code:
+//! - [`classic`]: the course template's model (spec section 5), the default for course files,
+//!   its pixels sampled by [`adaptive`] ([`adaptive::render_classic`]);
+//! - [`photon`]: the course's photon mapper (spec section 10), over the [`photon_map`] and the
+//!   same adaptive sampler ([`photon::render_rows`]);
+//! - [`path`]: the physically based path tracer (spec section 11, [`path::render_sums`]);
 //! - [`sppm`]: stochastic progressive photon mapping (spec section 11), over the same
-//!   [`photon_map`] and the path tracer's camera walk.
+//!   [`photon_map`] and the path tracer's camera walk ([`sppm::render_from`]).
 //!
-//! The physically based models share the material lobes of [`bsdf`] and the light sampling of
-//! [`lights`].
+//! The course's two models share the lobes of [`course_lobes`]; the physically based ones share
+//! the material lobes of [`bsdf`] and the light sampling of [`lights`]. Every model reports its
+//! progress and work through [`report`].
 
 pub mod adaptive;
 pub mod bsdf;

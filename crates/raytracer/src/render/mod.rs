@@ -3,12 +3,12 @@
 //! adaptive sampler of [`crate::integrator::adaptive`], the path tracer with
 //! [`crate::integrator::path::render_sums`], SPPM with [`crate::integrator::sppm::render_from`]).
 //!
-//! The physically based models are driven here too. The path tracer renders any set of rows
+//! The path tracer renders any set of rows
 //! ([`Rows`]) over any range of sample indices ([`path_sums`]): every sample draws from its own
 //! stream (seed, pixel, sample index) and a pixel's samples are summed exactly ([`ExactSum`]), so
 //! a render split into tiles (sets of rows) and passes (sample ranges) merges into the same bytes
 //! as one render: a pixel of `N` samples is `sum / N` whatever the grouping of its sums. SPPM
-//! renders any set of rows ([`crate::integrator::sppm::render`]): its photons draw from streams
+//! renders any set of rows ([`crate::integrator::sppm::render_from`]): its photons draw from streams
 //! of (seed, pass, photon index), the same for every set. [`render_portion`] renders some rows
 //! and some runs of a render ([`RenderSettings::runs`]); [`checkpoint`] keeps its finished work.
 
@@ -31,7 +31,7 @@ pub use crate::integrator::adaptive::{
     CONTRAST_THRESHOLD, MAX_NESTED_FACTOR, NOISE_GRID, NOISE_THRESHOLD, REFINE_GRID, Sampling,
 };
 use crate::integrator::path::DEFAULT_MAX_DEPTH;
-use crate::integrator::photon::{self};
+use crate::integrator::photon;
 pub use crate::integrator::report::{Progress, RenderStats, Stage};
 use crate::integrator::sppm::{self, SppmSettings};
 use crate::prepare::{Hit, PreparedScene};

@@ -8,11 +8,11 @@
 //! run reports them all.
 
 //!
-//! - [`pieces`]: the parallel piece cutter (large files);
-//! - [`lexer`]: lines into tokens;
-//! - [`blocks`]: the block state machine;
-//! - [`keys`]: the typed key reader;
-//! - [`build`]: the camera, lights, materials and primitives built from a block's keys.
+//! - `pieces`: the parallel piece cutter (large files);
+//! - `lexer`: lines into tokens;
+//! - `blocks`: the block state machine;
+//! - `keys`: the typed key reader;
+//! - `build`: the camera, lights, materials and primitives built from a block's keys.
 
 mod blocks;
 mod build;
