@@ -11,8 +11,9 @@
 //! The modules stand in tiers, bottom up: [`base`]; [`geometry`] and [`accel`]; the scene
 //! description ([`scene`], [`material`], [`light`]); the scene formats ([`scene::course`]);
 //! preparation ([`prepare`], [`texture`], [`procedural`], [`camera`]); the models
-//! ([`integrator`]); the driver and split renders ([`render`](mod@render), [`parts`]). No module imports from
-//! a tier above its own (`tests/layers.rs` checks it; `docs/architecture.md` has the code map).
+//! ([`integrator`]); the driver and split renders ([`render`](mod@render), [`parts`]). No module
+//! imports from a tier above its own (`tests/layers.rs` checks it; `docs/architecture.md` has the
+//! code map).
 //!
 //! The library never prints and never exits: it returns values and typed errors, and reports
 //! progress through a callback.
