@@ -126,9 +126,19 @@ pub struct RenderArgs {
     #[arg(long)]
     pub check: bool,
 
+    /// For a Mitsuba 3 scene file (XML), define NAME as VALUE for `$NAME` in the file, as
+    /// Mitsuba's own `-D` (repeatable; it wins over the file's `<default>`).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+    pub defines: Vec<(String, String)>,
+
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+/// Parses `-D NAME=VALUE`.
+fn parse_define(text: &str) -> Result<(String, String), String> {
+    scene::mitsuba::parse_define(text).map_err(|e| e.to_string())
 }
 
 /// Parses `--model`.
@@ -202,6 +212,15 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         Some(path) => SourceFile::read(path).map_err(|e| fail(&e.to_string()))?,
         None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
     };
+    if is_mitsuba_scene(&source) {
+        return mitsuba_scene(source, &args);
+    }
+    if !args.defines.is_empty() {
+        errln!(
+            "warning: -D applies to Mitsuba 3 scene files only; `{}` is a course scene file",
+            source.name()
+        );
+    }
     let parsed = scene::parse(&source).map_err(|e| {
         print_diagnostics_with(&e.diagnostics, e.omitted);
         let n = e.error_count();
@@ -636,6 +655,44 @@ fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
     if !parts.is_empty() {
         errln!("... and {}\n", parts.join(" and "));
     }
+}
+
+/// Whether `source` is a Mitsuba 3 scene file: named `.xml`, or XML by its first character.
+fn is_mitsuba_scene(source: &SourceFile) -> bool {
+    Path::new(source.name()).extension().is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+        || source.text().trim_start_matches('\u{feff}').trim_start().starts_with('<')
+}
+
+/// A Mitsuba 3 scene file: read and checked (includes, `$name` and `-D`, every property with its
+/// position). Rendering Mitsuba scenes is not built yet: with `--check` the file's check is the
+/// whole job; otherwise it is an error that says so, after the file's own errors if it has any.
+fn mitsuba_scene(source: SourceFile, args: &RenderArgs) -> Result<(), ExitCode> {
+    let name = source.name().to_owned();
+    let doc = scene::mitsuba::read_source(source, &args.defines).map_err(|e| {
+        print_diagnostics(&[e.diagnostic()]);
+        fail(&format!("`{name}` is not a usable Mitsuba 3 scene file; nothing was rendered"))
+    })?;
+    print_diagnostics(&doc.warnings);
+    let mut counts: Vec<(scene::mitsuba::PluginKind, usize)> = Vec::new();
+    for plugin in doc.plugins().filter(|p| p.kind != scene::mitsuba::PluginKind::Scene) {
+        match counts.iter_mut().find(|(k, _)| *k == plugin.kind) {
+            Some((_, n)) => *n += 1,
+            None => counts.push((plugin.kind, 1)),
+        }
+    }
+    counts.sort();
+    let summary = counts.iter().map(|(k, n)| format!("{n} {}", k.tag())).collect::<Vec<_>>().join(", ");
+    let v = doc.version;
+    if args.check {
+        if !args.quiet {
+            outln!("{name}: ok, a Mitsuba {}.{}.{} scene ({summary})", v.major, v.minor, v.patch);
+        }
+        return Ok(());
+    }
+    Err(fail(&format!(
+        "`{name}` is a Mitsuba 3 scene ({summary}): rayterra reads and checks Mitsuba scene files \
+         (`--check`), but does not render them yet; nothing was rendered"
+    )))
 }
 
 fn plural(n: usize) -> &'static str {

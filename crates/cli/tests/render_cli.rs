@@ -752,3 +752,42 @@ fn a_file_of_nuls_gives_a_short_report() {
     }
     assert!(!dir.path().join("out.png").exists());
 }
+
+/// A Mitsuba 3 scene file is read and checked with its positions; it is not rendered yet, and
+/// says so instead of being parsed as a course file.
+#[test]
+fn mitsuba_scene_files_are_checked_and_not_rendered_yet() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::fs::write(
+        dir.path().join("scene.xml"),
+        "<scene version=\"3.0.0\">\n  <default name=\"r\" value=\"0.5\"/>\n  <include filename=\"part.xml\"/>\n</scene>\n",
+    )
+    .expect("write scene");
+    std::fs::write(
+        dir.path().join("part.xml"),
+        "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <float name=\"radius\" value=\"$r\"/>\n  </shape>\n</scene>\n",
+    )
+    .expect("write include");
+    let out = rayterra(&["render", "scene.xml", "--check", "-D", "r=2"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(
+        text(&out.stdout).contains("scene.xml: ok, a Mitsuba 3.0.0 scene (1 shape)"),
+        "{}",
+        text(&out.stdout)
+    );
+
+    let out = rayterra(&["render", "scene.xml", "-o", "out.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("does not render them yet"), "{}", text(&out.stderr));
+    assert!(!dir.path().join("out.png").exists());
+
+    std::fs::write(dir.path().join("part.xml"), "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <float name=\"radius\" value=\"x1\"/>\n  </shape>\n</scene>\n")
+        .expect("write include");
+    let out = rayterra(&["render", "scene.xml", "--check"], dir.path());
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("part.xml:3:33"), "the error names the included file, line and column: {stderr}");
+
+    let out = rayterra(&["render", "scene.xml", "--check", "-D", "no-equals"], dir.path());
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+}
