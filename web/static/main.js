@@ -4,6 +4,8 @@ import init, { start, deliver_world, page_state, capture } from './pkg/rayterra_
 
 const $ = (id) => document.getElementById(id);
 
+// An error stays on the page until the user acts (picks or drops another heightmap); once the
+// engine has stopped (no GPU, an internal error: `page_state().error`), its message stays for good.
 function showError(message) {
   const box = $('error');
   box.textContent = message;
@@ -21,11 +23,14 @@ async function main() {
   try {
     await init();
   } catch (error) {
+    $('api').textContent = 'not started: this browser cannot run the page (see below)';
     showError(`This browser cannot run the page's WebAssembly: ${error}`);
     return;
   }
-  // For people and for the browser test: what the page is doing, and the next frame read back.
-  window.rayterra = { state: page_state, capture };
+  // For people and for the browser test: what the page is doing, the next frame read back, and
+  // how many worlds the worker has finished.
+  window.rayterra = { state: page_state, capture, worldsBuilt: 0 };
+  const stopped = () => page_state().error != null;
   let options;
   try {
     const query = new URLSearchParams(location.search);
@@ -42,6 +47,7 @@ async function main() {
     }
     options = start(location.search);
   } catch (error) {
+    $('api').textContent = 'not started: the address has an error (see below)';
     showError(error.message ?? String(error));
     return;
   }
@@ -49,31 +55,34 @@ async function main() {
   const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
   let building = false;
   worker.onmessage = ({ data }) => {
+    if (data.type !== 'progress') building = false;
+    if (data.type === 'world') window.rayterra.worldsBuilt += 1;
+    // A stopped engine draws nothing more: its message stays, without progress over it.
+    if (stopped()) return;
     switch (data.type) {
       case 'progress':
         showProgress(data.fraction, data.stage);
         break;
       case 'world':
-        building = false;
         try {
           deliver_world(data.layers, data.description);
           $('progress').hidden = true;
-          $('error').hidden = true;
         } catch (error) {
           showError(error.message ?? String(error));
         }
         break;
       case 'error':
-        building = false;
         showError(data.message);
         break;
     }
   };
   worker.onerror = (event) => {
     building = false;
+    if (stopped()) return;
     showError(`The world could not be built: ${event.message ?? 'the worker stopped'}`);
   };
   const build = (message, transfer = []) => {
+    if (stopped()) return;
     if (building) {
       showError('A world is still being built; try again when it is done.');
       return;

@@ -1,7 +1,9 @@
 // Drives headless Chromium (Debian's /usr/bin/chromium, through its DevTools protocol) against
 // the page served at --url, once with WebGPU, once with WebGL2 only, and once with neither, and
 // writes what it saw into --out for tests/browser.rs to check: the page's reported state, the
-// frames read back from the engine, a compositor screenshot, and the messages shown.
+// frames read back from the engine, a compositor screenshot, and the messages shown. Both looks
+// are drawn on both APIs (the course look also with `api=webgl`); without
+// either API, and with a bad address, the message must still be there seconds later.
 //
 // node browser.mjs --url http://127.0.0.1:PORT --out DIR --corrupt FILE
 import { writeFileSync } from 'node:fs';
@@ -46,6 +48,15 @@ const errorShown = () => {
   const box = document.getElementById('error');
   return box && !box.hidden && box.textContent;
 };
+// What the page shows: its error box (null when hidden), status line and progress line.
+const shown = () => ({
+  error: (() => {
+    const box = document.getElementById('error');
+    return box && !box.hidden ? box.textContent : null;
+  })(),
+  status: document.getElementById('api').textContent,
+  progress: !document.getElementById('progress').hidden,
+});
 
 async function captureTo(page, name) {
   const frame = await page.evaluate(async () => {
@@ -58,6 +69,84 @@ async function captureTo(page, name) {
   return { width: frame.width, height: frame.height };
 }
 
+// A frame read back, or why it could not be.
+async function tryCapture(page, name) {
+  try {
+    return await captureTo(page, name);
+  } catch (error) {
+    return { error: String(error?.message ?? error) };
+  }
+}
+
+// The page at `query` in a new tab of `browser`: its state after 3 frames (or its stop), and the
+// frame it drew, written as NAME-frame.rgba.
+async function drawOnce(browser, query, name) {
+  const report = { query, console: [], pageErrors: [] };
+  const page = await browser.newPage();
+  try {
+    await page.setViewport({ width: 800, height: 600 });
+    page.on('console', (message) => report.console.push(`${message.type()}: ${message.text()}`));
+    page.on('pageerror', (error) => report.pageErrors.push(error.message));
+    await page.goto(`${url}/${query}`);
+    await waitFor(page, `frames of the world (${query})`, () => {
+      const s = window.rayterra?.state?.();
+      return s && (s.error || s.frames >= 3);
+    }, 180);
+    report.state = await state(page);
+    if (!report.state.error) report.frame = await tryCapture(page, `${name}-frame`);
+    // Frames go on being drawn without a stop.
+    await sleep(1000);
+    report.later = await state(page);
+    return report;
+  } catch (error) {
+    report.failure = String(error?.stack ?? error);
+    return report;
+  } finally {
+    await page.close();
+  }
+}
+
+// The page at `query` where it cannot draw: the message it shows at first, and what it shows
+// a few seconds later (once the worker has built the world, where `world` says it starts one).
+async function failOnce(browser, { query, world }) {
+  const report = { query, pageErrors: [] };
+  const page = await browser.newPage();
+  try {
+    page.on('pageerror', (error) => report.pageErrors.push(error.message));
+    await page.goto(`${url}/${query}`);
+    report.first = await waitFor(page, `the page to say it cannot draw (${query})`, errorShown, 60);
+    // The worker finishes its world (which used to clear the message), then time passes.
+    if (world) {
+      await waitFor(page, `the worker's world (${query})`, () => window.rayterra.worldsBuilt >= 1, 120);
+    }
+    report.worldsBuilt = await page.evaluate(() => window.rayterra?.worldsBuilt ?? null);
+    await sleep(3000);
+    report.later = await page.evaluate(shown);
+    return report;
+  } catch (error) {
+    report.failure = String(error?.stack ?? error);
+    return report;
+  } finally {
+    await page.close();
+  }
+}
+
+// The course look (on WebGL2 also asked for by `api=webgl`: Chromium's WebGPU flags here leave
+// it no WebGL2).
+const lookRuns = {
+  webgpu: { course: '?size=640x360&paused&time=3&look=course' },
+  webgl: { course: '?size=640x360&paused&time=3&look=course',
+    'course-webgl': '?size=640x360&paused&time=3&look=course&api=webgl' },
+  none: {},
+};
+const failRuns = {
+  none: {
+    'no-api': { query: '?size=640x360&paused&time=3', world: true },
+    'no-webgl': { query: '?api=webgl&look=course', world: true },
+    'bad-address': { query: '?seed=one', world: false },
+  },
+};
+
 async function run(mode) {
   const browser = await puppeteer.launch({
     executablePath: '/usr/bin/chromium',
@@ -67,6 +156,12 @@ async function run(mode) {
   });
   const report = { mode, console: [], pageErrors: [] };
   try {
+    for (const [name, query] of Object.entries(failRuns[mode] ?? {})) {
+      report[name] = await failOnce(browser, query);
+    }
+    for (const [name, query] of Object.entries(lookRuns[mode])) {
+      report[name] = await drawOnce(browser, query, `${mode}-${name}`);
+    }
     const page = await browser.newPage();
     await page.setViewport({ width: 800, height: 600 });
     page.on('console', (message) => report.console.push(`${message.type()}: ${message.text()}`));

@@ -1,6 +1,6 @@
 //! The page in a real browser: builds it (`web/build.sh`), serves it on 127.0.0.1, and has
 //! `browser.mjs` drive Debian's headless Chromium with WebGPU, with WebGL2 only, and with
-//! neither; then checks what it saw. Needs Debian's `rustc-web cargo-web rust-web-src lld-22
+//! neither; then checks what it saw: both looks on both APIs, and messages that stay. Needs Debian's `rustc-web cargo-web rust-web-src lld-22
 //! chromium`, `wasm-bindgen-cli` and `npm ci` in `web/tests` (as `.ci/run` installs); skipped
 //! loudly without them, except under CI.
 
@@ -213,7 +213,59 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
             image::open(out.path().join(format!("{mode}-screenshot.png"))).expect("screenshot").to_rgba8();
         check_layout(&screenshot, &format!("{mode} screenshot"));
     }
+    // The course look on each API, against the native course render.
+    let course =
+        terrain::headless::render_image(&gpu, &world, &config, &Settings::course(), (640, 360), &view)
+            .expect("native course frame");
+    for (mode, run, api) in
+        [("webgpu", "course", "WebGPU"), ("webgl", "course", "WebGL2"), ("webgl", "course-webgl", "WebGL2")]
+    {
+        let what = format!("{mode} browser, {run}");
+        let report = &read_json(&out.path().join(format!("{mode}.json")))[run];
+        assert!(report["failure"].is_null(), "{what}: {}", report["failure"]);
+        assert_eq!(report["pageErrors"], serde_json::json!([]), "{what}: errors on the page");
+        for state in [&report["state"], &report["later"]] {
+            assert!(state["error"].is_null(), "{what}: the page stopped: {}", state["error"]);
+            assert_eq!(state["api"], api, "{what}: the page reports its API");
+        }
+        let frames = |state: &Value| state["frames"].as_u64().expect("frames");
+        assert!(frames(&report["later"]) > frames(&report["state"]), "{what}: no frames after the first");
+        if report["frame"]["error"].is_string() && api == "WebGPU" {
+            eprintln!("{what}: frames cannot be read back here ({})", report["frame"]["error"]);
+            continue;
+        }
+        assert!(report["frame"]["error"].is_null(), "{what}: {}", report["frame"]["error"]);
+        let frame = read_frame(out.path(), &format!("{mode}-{run}-frame"), &report["frame"]);
+        let difference = mean_difference(&frame, &course);
+        eprintln!("{what}: mean difference from the native course render {difference:.2} (8-bit steps)");
+        assert!(
+            difference < 1.0,
+            "{what}: the frame differs from the native course render by {difference:.2}"
+        );
+    }
+
     let none = read_json(&out.path().join("none.json"));
+    assert!(none["failure"].is_null(), "none: {}", none["failure"]);
     let message = none["error"].as_str().expect("a message without WebGPU and WebGL2");
     assert!(message.contains("neither WebGPU nor WebGL2"), "{message}");
+    // Messages that stay: without either API (after the worker's world has come), without
+    // WebGL2 when the address asks for it, and for a bad address.
+    for (run, says, status, world) in [
+        ("no-api", "neither WebGPU nor WebGL2", "no WebGPU or WebGL2", true),
+        ("no-webgl", "offers no WebGL2", "no WebGPU or WebGL2", true),
+        ("bad-address", "`seed=one` is not a whole number", "the address has an error", false),
+    ] {
+        let report = &none[run];
+        assert!(report["failure"].is_null(), "{run}: {}", report["failure"]);
+        assert_eq!(report["pageErrors"], serde_json::json!([]), "{run}: errors on the page");
+        let first = report["first"].as_str().expect("a message");
+        assert!(first.contains(says), "{run}: {first}");
+        let built = report["worldsBuilt"].as_u64().expect("worlds built");
+        assert_eq!(built >= 1, world, "{run}: {built} worlds built");
+        let later = &report["later"];
+        assert_eq!(later["error"].as_str(), Some(first), "{run}: the message did not stay");
+        let shown_status = later["status"].as_str().expect("a status line");
+        assert!(shown_status.contains(status), "{run}: the status line says {shown_status:?}");
+        assert_eq!(later["progress"], false, "{run}: progress shown over the message");
+    }
 }

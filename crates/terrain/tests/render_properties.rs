@@ -7,7 +7,7 @@ mod common;
 use common::{gpu, marker_world, project, render, view_from};
 use image::{Rgba, RgbaImage};
 use terrain::headless::{HeadlessRenderer, OffscreenTarget};
-use terrain::render::{Backend, Renderer, draw_names};
+use terrain::render::{Backend, LandDrawPath, Renderer, draw_names};
 use terrain::{Look, SceneConfig, Settings};
 
 const SIZE: (u32, u32) = (160, 96);
@@ -203,6 +203,51 @@ fn culling_the_hidden_reflection_changes_no_pixel() {
     }
     // And it did leave some out (else this test would prove nothing).
     assert!(left_out > 1000, "the culling left out only {left_out} triangles");
+}
+
+/// The course look's land drawn without a base vertex (each chunk's draw binding the vertex
+/// buffer at its first vertex, as on WebGL2) or with one per direct draw is the multi-draw
+/// picture byte for byte, from views near and far (coarse and fine levels, many chunks each).
+#[test]
+fn every_land_draw_path_gives_the_same_picture() {
+    let Some(gpu) = gpu(Backend::Vulkan) else {
+        return;
+    };
+    let world = common::default_island();
+    let views = [
+        common::start_view(0.0),
+        common::view_from([6.0, 1.2, 3.0], 70.0, -8.0),
+        common::view_from([-4.0, 9.0, 12.0], -20.0, -35.0),
+        common::view_from([0.0, 1.0, 16.0], 0.0, -4.0),
+    ];
+    let mut renderer =
+        HeadlessRenderer::new(gpu, world, &SceneConfig::default(), &Settings::course(), 320, 180)
+            .expect("renderer");
+    // The land's two draws alone (the paths differ there only), then the whole frame.
+    for limit in [Some(2), None] {
+        renderer.renderer_mut().set_draw_limit(limit);
+        for view in &views {
+            let taken = renderer.renderer_mut().set_land_draw_path(LandDrawPath::default());
+            assert!(taken.is_some(), "the course look draws the island as its static mesh");
+            let normal = renderer.render(gpu, view).expect("renders");
+            let land = normal.pixels().filter(|p| p.0 != [0, 0, 0, 255]).count();
+            assert!(land > 1000, "only {land} pixels of land from {:?}", view.pose);
+            for path in [LandDrawPath::BaseVertex, LandDrawPath::VertexOffset] {
+                let taken = renderer.renderer_mut().set_land_draw_path(path);
+                if path == LandDrawPath::VertexOffset {
+                    assert_eq!(taken, Some(path), "every GPU can draw without a base vertex");
+                }
+                let image = renderer.render(gpu, view).expect("renders");
+                assert!(
+                    image == normal,
+                    "{taken:?} changed the picture from {:?} ({limit:?} draws)",
+                    view.pose
+                );
+            }
+        }
+    }
+    renderer.renderer_mut().set_draw_limit(None);
+    renderer.renderer_mut().set_land_draw_path(LandDrawPath::default());
 }
 
 /// The draw limit adds a look's draws one at a time, in the order `draw_names` lists them: none

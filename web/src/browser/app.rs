@@ -29,7 +29,7 @@ use winit::keyboard::PhysicalKey;
 use winit::platform::web::WindowAttributesExtWebSys;
 use winit::window::{CursorGrabMode, Fullscreen, Window, WindowId};
 
-use super::{answer_captures, fail, page, report, take_capture_requests, take_delivered};
+use super::{answer_captures, fail, fail_with_status, page, report, take_capture_requests, take_delivered};
 use crate::address::{BrowserApi, PageOptions};
 
 /// Where the panel's Save and Load keep the settings: the browser's storage for this site.
@@ -41,6 +41,12 @@ const SETTINGS_PLACE: &str = "this browser's storage for the page";
 struct Opened {
     gpu: Gpu,
     surface: wgpu::Surface<'static>,
+}
+
+/// Why the GPU did not open: the message, and what the status line says instead of the API.
+struct NotOpened {
+    message: String,
+    status: &'static str,
 }
 
 /// Drawing into the canvas.
@@ -73,7 +79,7 @@ pub(super) struct PageApp {
     lock_seen: bool,
     window: Option<Arc<Window>>,
     /// Filled by the task that opens the GPU.
-    opening: Rc<RefCell<Option<Result<Opened, String>>>>,
+    opening: Rc<RefCell<Option<Result<Opened, NotOpened>>>>,
     drawing: Option<Drawing>,
     capture: Option<Capture>,
     world: Option<World>,
@@ -121,11 +127,15 @@ impl PageApp {
             return;
         }
         let Some(opened) = self.opening.borrow_mut().take() else { return };
-        let (Some(window), Ok(Opened { gpu, surface })) =
-            (self.window.clone(), opened.map_err(|e| self.stop(e)))
-        else {
-            return;
+        let opened = match opened {
+            Ok(opened) => opened,
+            Err(NotOpened { message, status }) => {
+                self.stopped = true;
+                fail_with_status(message, status);
+                return;
+            }
         };
+        let (Some(window), Opened { gpu, surface }) = (self.window.clone(), opened) else { return };
         let size = window.inner_size();
         let present = wgpu::PresentMode::AutoVsync;
         let Some(surface) = PresentSurface::new(&gpu, surface, (size.width, size.height), present) else {
@@ -381,24 +391,29 @@ impl PageApp {
 
 /// Opens the GPU on `window`'s canvas: WebGPU where the browser has it (and `api` allows),
 /// WebGL2 otherwise.
-async fn open_gpu(window: Arc<Window>, api: BrowserApi) -> Result<Opened, String> {
+async fn open_gpu(window: Arc<Window>, api: BrowserApi) -> Result<Opened, NotOpened> {
     let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle();
     descriptor.backends = match api {
         BrowserApi::Auto => wgpu::Backends::BROWSER_WEBGPU | wgpu::Backends::GL,
         BrowserApi::WebGl => wgpu::Backends::GL,
     };
     let instance = wgpu::util::new_instance_with_webgpu_detection(descriptor).await;
-    let neither = |reason: String| {
-        format!(
-            "This browser offers neither WebGPU nor WebGL2 to the page ({reason}), so the terrain cannot be drawn. \
+    let wanted = match api {
+        BrowserApi::Auto => "neither WebGPU nor WebGL2",
+        BrowserApi::WebGl => "no WebGL2 (the address's `api=webgl` leaves WebGPU out)",
+    };
+    let neither = |reason: String| NotOpened {
+        message: format!(
+            "This browser offers {wanted} to the page ({reason}), so the terrain cannot be drawn. \
              Try a current Chrome, Edge, Firefox or Safari with hardware acceleration turned on."
-        )
+        ),
+        status: "no WebGPU or WebGL2",
     };
     let surface = instance.create_surface(window).map_err(|error| neither(error.to_string()))?;
     let gpu =
         Gpu::open_async(instance, Backend::Auto, Some(&surface)).await.map_err(|error| match error {
             terrain::render::GpuError::NoAdapter { reason, .. } => neither(reason),
-            other => other.to_string(),
+            other => NotOpened { message: other.to_string(), status: "the GPU did not open (see below)" },
         })?;
     Ok(Opened { gpu, surface })
 }

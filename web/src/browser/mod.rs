@@ -87,9 +87,21 @@ fn report(update: impl FnOnce(&mut PageState)) {
     STATE.with(|state| update(&mut state.borrow_mut()));
 }
 
-/// Reports a stop on the page and in [`page_state`].
+/// Reports a stop on the page and in [`page_state`]. The message stays (the page's script keeps
+/// it over the worker's later news); the status line, if it still says the GPU is starting,
+/// says instead that the page stopped.
 fn fail(message: String) {
+    fail_with_status(message, "stopped (see below)");
+}
+
+/// [`fail`], with `status` for the status line if the GPU had not opened.
+fn fail_with_status(message: String, status: &str) {
     page::show_error(&message);
+    // (`try_borrow`: a panic while the state is being updated must still show its message.)
+    let opened = STATE.with(|state| state.try_borrow().is_ok_and(|state| state.api.is_some()));
+    if !opened {
+        page::set_text("api", status);
+    }
     report(|state| state.error = Some(message));
 }
 

@@ -3,6 +3,7 @@
 //! land as the static mesh (today's picture, bit for bit); larger ones as the GPU grid, with the
 //! same shading.
 
+use super::draw_path::{DrawSupport, LandDrawPath};
 use super::grid::{GridPass, GridTerrain, upload_view};
 use super::land::LandPass;
 use super::pipeline::{PassContext, PipelinePair, PipelineSpec, pipelines, shader_source};
@@ -50,12 +51,13 @@ enum CourseLand {
 
 impl CourseLook {
     /// Uploads what the course look needs of `world`; `grid` is the renderer's grid when the map
-    /// is larger than [`MESH_MAX_SIDE`].
+    /// is larger than [`MESH_MAX_SIDE`], else the mesh is drawn by `draws` (what the GPU offers,
+    /// and the path asked for).
     pub fn new(
         context: &PassContext<'_>,
         world: &World,
         config: &SceneConfig,
-        multi_draw: bool,
+        draws: (DrawSupport, LandDrawPath),
         grid: Option<&GridTerrain>,
     ) -> Result<Self, RenderError> {
         let faces = SkyFaces::new(context, &world.sky)?;
@@ -64,7 +66,7 @@ impl CourseLook {
         let mut gpu_bytes = (0, faces.bytes + world.water.as_raw().len() as u64 * 4 / 3);
         let land = match grid {
             None => {
-                let land = LandPass::new(context, world, config, multi_draw)?;
+                let land = LandPass::new(context, world, config, draws.0, draws.1)?;
                 gpu_bytes = (land.gpu_bytes().0, gpu_bytes.1 + land.gpu_bytes().1);
                 CourseLand::Mesh(Box::new(land))
             }

@@ -1,11 +1,13 @@
 //! The terrain and its mirror image: one static mesh (cut at the waterline when it is built) in
 //! chunks and levels of detail. Each frame the chunks in view are chosen at the coarsest level
-//! whose error stays under a pixel, and each pass draws them with one multi-draw-indirect call.
+//! whose error stays under a pixel, and each pass draws them with one multi-draw-indirect call
+//! (or, where the GPU cannot, one call per chunk: [`LandDrawPath`]).
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::RenderError;
+use super::draw_path::{DrawSupport, LandDrawPath};
 use super::pipeline::{
     Binding, PassContext, PipelinePair, PipelineSpec, bind_group, pipelines, shader_source,
 };
@@ -16,6 +18,9 @@ use crate::world::{Heightfield, TerrainMesh, World};
 
 /// The course look's land mesh: the WGSL source its pipeline is built from.
 pub(super) const SHADER: &str = shader_source!("land.wgsl");
+
+/// Bytes of one vertex: its position.
+const VERTEX_STRIDE: u64 = size_of::<[f32; 3]>() as u64;
 
 /// Bytes of one indirect draw's arguments.
 const INDIRECT_ARGS_SIZE: u64 = size_of::<wgpu::util::DrawIndexedIndirectArgs>() as u64;
@@ -42,7 +47,7 @@ fn land_pipelines(
 ) -> PipelinePair {
     let attributes = wgpu::vertex_attr_array![0 => Float32x3];
     let buffers = [wgpu::VertexBufferLayout {
-        array_stride: size_of::<[f32; 3]>() as u64,
+        array_stride: VERTEX_STRIDE,
         step_mode: wgpu::VertexStepMode::Vertex,
         attributes: &attributes,
     }];
@@ -69,10 +74,13 @@ pub struct LandPass {
     bind_group: wgpu::BindGroup,
     /// The chunk table (its positions and indices live on the GPU only).
     chunks: TerrainMesh,
-    /// Draw arguments of the direct pass, then of the mirrored pass (one slot per chunk each).
-    indirect: wgpu::Buffer,
-    /// Whether the GPU can draw from `indirect` (otherwise each chunk is its own draw call).
-    multi_draw: bool,
+    /// Draw arguments of the direct pass, then of the mirrored pass (one slot per chunk each),
+    /// where the GPU draws indirectly (WebGL2 may not even make such a buffer).
+    indirect: Option<wgpu::Buffer>,
+    /// What the GPU offers the draws.
+    support: DrawSupport,
+    /// How the chunks are drawn (one the GPU has).
+    path: LandDrawPath,
     /// The chunks chosen for the direct (0) and mirrored (1) pass of the current frame.
     chosen: [Vec<DrawRange>; 2],
     /// Whether the mirrored pass leaves out the chunks the land hides (on unless measuring).
@@ -80,18 +88,20 @@ pub struct LandPass {
 }
 
 impl LandPass {
-    /// Builds the mesh of `world`'s heightmap and uploads it with the colour and detail maps.
+    /// Builds the mesh of `world`'s heightmap and uploads it with the colour and detail maps, to
+    /// draw it by `path` where the GPU (offering `support`) can, else by the next path down.
     pub fn new(
         context: &PassContext<'_>,
         world: &World,
         config: &SceneConfig,
-        multi_draw: bool,
+        support: DrawSupport,
+        path: LandDrawPath,
     ) -> Result<Self, RenderError> {
         let (device, queue) = (context.device, context.queue);
         let field = Heightfield::new(&world.heightmap, config);
         let mesh = TerrainMesh::new(&field);
         let max_buffer = device.limits().max_buffer_size;
-        let vertex_bytes = (mesh.positions.len() * size_of::<[f32; 3]>()) as u64;
+        let vertex_bytes = mesh.positions.len() as u64 * VERTEX_STRIDE;
         let index_bytes = (mesh.indices.len() * size_of::<u16>()) as u64;
         if vertex_bytes.max(index_bytes) > max_buffer {
             return Err(RenderError::MeshSize {
@@ -156,11 +166,13 @@ impl LandPass {
         let vertices =
             filled("land vertices", bytemuck::cast_slice(&mesh.positions), wgpu::BufferUsages::VERTEX);
         let indices = filled("land indices", bytemuck::cast_slice(&mesh.indices), wgpu::BufferUsages::INDEX);
-        let indirect = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("land draws"),
-            size: 2 * INDIRECT_ARGS_SIZE * max_draws(&mesh),
-            usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
+        let indirect = support.indirect.then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("land draws"),
+                size: 2 * INDIRECT_ARGS_SIZE * max_draws(&mesh),
+                usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
         });
         Ok(Self {
             pipelines,
@@ -174,7 +186,8 @@ impl LandPass {
             // Keep the chunk table only: the geometry now lives on the GPU.
             chunks: TerrainMesh { positions: Vec::new(), indices: Vec::new(), ..mesh },
             indirect,
-            multi_draw,
+            support,
+            path: support.resolve(path),
             chosen: [Vec::new(), Vec::new()],
             cull_hidden_reflection: true,
         })
@@ -198,9 +211,11 @@ impl LandPass {
                     first_instance: 0,
                 })
                 .collect();
-            if self.multi_draw && !args.is_empty() {
+            if let (LandDrawPath::Indirect, Some(indirect)) = (self.path, &self.indirect)
+                && !args.is_empty()
+            {
                 let bytes: Vec<u8> = args.iter().flat_map(|a| a.as_bytes().to_vec()).collect();
-                queue.write_buffer(&self.indirect, self.slot_offset(slot), &bytes);
+                queue.write_buffer(indirect, self.slot_offset(slot), &bytes);
             }
         }
     }
@@ -210,7 +225,7 @@ impl LandPass {
     }
 
     /// Draws the terrain, or its mirror image, with the chunks chosen by [`Self::prepare`]: one
-    /// multi-draw call (or one call per chunk where the GPU cannot draw indirectly).
+    /// multi-draw call, or one call per chunk (see [`LandDrawPath`]).
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>, frame: &wgpu::BindGroup, mirrored: bool) {
         let slot = usize::from(mirrored);
         let chosen = &self.chosen[slot];
@@ -226,14 +241,35 @@ impl LandPass {
         pass.set_bind_group(1, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint16);
-        if self.multi_draw {
-            pass.multi_draw_indexed_indirect(&self.indirect, self.slot_offset(slot), chosen.len() as u32);
-        } else {
-            for range in chosen {
-                let indices = range.first_index..range.first_index + range.index_count;
-                pass.draw_indexed(indices, range.base_vertex as i32, 0..1);
+        match (self.path, &self.indirect) {
+            (LandDrawPath::Indirect, Some(indirect)) => {
+                pass.multi_draw_indexed_indirect(indirect, self.slot_offset(slot), chosen.len() as u32)
+            }
+            (LandDrawPath::Indirect, None) | (LandDrawPath::BaseVertex, _) => {
+                for range in chosen {
+                    let indices = range.first_index..range.first_index + range.index_count;
+                    pass.draw_indexed(indices, range.base_vertex as i32, 0..1);
+                }
+            }
+            (LandDrawPath::VertexOffset, _) => {
+                // The chunk's indices count from its first vertex: bind the buffer there.
+                for range in chosen {
+                    let indices = range.first_index..range.first_index + range.index_count;
+                    pass.set_vertex_buffer(
+                        0,
+                        self.vertices.slice(u64::from(range.base_vertex) * VERTEX_STRIDE..),
+                    );
+                    pass.draw_indexed(indices, 0, 0..1);
+                }
             }
         }
+    }
+
+    /// Draws the chunks by `path` from the next frame on, or by the next path down where the GPU
+    /// lacks it; returns the path taken.
+    pub fn set_draw_path(&mut self, path: LandDrawPath) -> LandDrawPath {
+        self.path = self.support.resolve(path);
+        self.path
     }
 
     /// Draws the triangles' edges (`on`) or their faces. The edges need the GPU's

@@ -5,6 +5,7 @@
 //! handful of draw calls, whatever the heightmap's size.
 
 mod course;
+mod draw_path;
 mod frame;
 mod gpu;
 mod grid;
@@ -26,6 +27,7 @@ mod uniforms;
 mod water;
 
 pub use course::MESH_MAX_SIDE;
+pub use draw_path::LandDrawPath;
 pub use frame::{FrameStats, FrameView};
 pub use gpu::{Backend, Gpu, GpuError};
 pub use lighting::SHADOW_MAP_SIZE;
@@ -33,6 +35,7 @@ pub use surface::{Acquired, PresentSurface};
 pub use texture::TEXTURE_FORMAT;
 
 use course::CourseLook;
+use draw_path::DrawSupport;
 use grid::GridTerrain;
 use modern::ModernLook;
 use pipeline::PassContext;
@@ -97,7 +100,10 @@ pub struct Renderer {
     /// Uniforms of the direct pass (index 0), the mirrored pass (1) and the sun's view (2).
     frame_buffers: [wgpu::Buffer; 3],
     frame_groups: [wgpu::BindGroup; 3],
-    multi_draw: bool,
+    /// What the GPU offers the static mesh's draws.
+    draw_support: DrawSupport,
+    /// How the static mesh's draws are asked to be made ([`Renderer::set_land_draw_path`]).
+    land_draw_path: LandDrawPath,
     /// The heightmap as a GPU grid (the modern look, and the course's on large maps).
     grid: Option<GridTerrain>,
     course: Option<CourseLook>,
@@ -192,8 +198,6 @@ impl Renderer {
                 }],
             })
         });
-        let multi_draw =
-            gpu.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::INDIRECT_EXECUTION);
         let mut renderer = Self {
             config: config.clone(),
             settings: settings.clone(),
@@ -201,7 +205,8 @@ impl Renderer {
             frame_layout,
             frame_buffers,
             frame_groups,
-            multi_draw,
+            draw_support: DrawSupport::of(&gpu.adapter),
+            land_draw_path: LandDrawPath::default(),
             grid: None,
             course: None,
             modern: None,
@@ -243,7 +248,13 @@ impl Renderer {
                     gpu.reserve("terrain mesh", samples * (12 + 12) * 4 / 3 * 2)?;
                 }
                 let course = gpu.scoped("course look's terrain and textures", || {
-                    CourseLook::new(&context, world, &self.config, self.multi_draw, grid)
+                    CourseLook::new(
+                        &context,
+                        world,
+                        &self.config,
+                        (self.draw_support, self.land_draw_path),
+                        grid,
+                    )
                 })??;
                 self.course = Some(course);
             }
@@ -277,6 +288,15 @@ impl Renderer {
         if let Some(land) = self.course.as_mut().and_then(CourseLook::mesh) {
             land.set_cull_hidden_reflection(on);
         }
+    }
+
+    /// Draws the course look's static mesh (maps up to [`MESH_MAX_SIDE`]) by `path` from the
+    /// next frame on, or by the next path down where the GPU lacks it (also for a mesh made
+    /// later). The picture is the same bit for bit on every path; this is for tests and
+    /// measurements. Returns the path the current mesh takes, `None` while there is none.
+    pub fn set_land_draw_path(&mut self, path: LandDrawPath) -> Option<LandDrawPath> {
+        self.land_draw_path = path;
+        self.course.as_mut().and_then(CourseLook::mesh).map(|land| land.set_draw_path(path))
     }
 
     /// Makes frames draw only the first `limit` of their look's draws ([`draw_names`] lists
