@@ -164,7 +164,8 @@ pub fn detect_from_head(head: &[u8], length: u64, name: &str) -> Option<DemForma
 /// most the first kilobyte (and the length) of the file.
 pub fn is_elevation_file(path: &Path) -> std::io::Result<bool> {
     use std::io::Read;
-    let file = std::fs::File::open(path)?;
+    // Never waits on a named pipe; a folder or device is refused.
+    let file = atomic_file::open_regular(path)?;
     let length = file.metadata()?.len();
     let mut head = Vec::with_capacity(1024);
     file.take(1024).read_to_end(&mut head)?;
@@ -195,7 +196,8 @@ pub fn read(bytes: &[u8], name: &str, allow_downsampling: bool) -> Result<Elevat
 /// Reads elevation data from a file: the file is read whole, then [`read`]. Errors name the file.
 pub fn read_file(path: &Path, allow_downsampling: bool) -> Result<Elevation, DemError> {
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|error| DemError::new(&name, format!("cannot read: {error}")))?;
+    let bytes = atomic_file::read_regular(path)
+        .map_err(|error| DemError::new(&name, format!("cannot read: {error}")))?;
     read(&bytes, &name, allow_downsampling)
 }
 
@@ -439,7 +441,8 @@ pub fn load_bytes(bytes: &[u8], name: &str, options: &LoadOptions) -> Result<Loa
 /// [`load_bytes`] on a file, read whole. Errors name the file.
 pub fn load_file(path: &Path, options: &LoadOptions) -> Result<Loaded, DemError> {
     let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|error| DemError::new(&name, format!("cannot read: {error}")))?;
+    let bytes = atomic_file::read_regular(path)
+        .map_err(|error| DemError::new(&name, format!("cannot read: {error}")))?;
     load_bytes(&bytes, &name, options)
 }
 
