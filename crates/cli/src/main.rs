@@ -8,6 +8,7 @@
 mod say;
 
 mod merge;
+mod oidn;
 mod render;
 mod same_file;
 mod size;

@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::image_io::{Image, OutputFormat, check_output, write_image};
+use raytracer::integrator::aov::DEFAULT_AOV_SAMPLES;
 use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::sppm::SppmStats;
@@ -35,6 +36,7 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render caustics.txt --model sppm --passes 64 --photons 200000\n  \
     rayterra render scene.txt --tile 2/8 -o part-2.exr   one of 8 tiles, for rayterra merge\n  \
     rayterra render scene.txt --model path --spp 64 --pass auto/16 -o pass.exr   in an array job\n  \
+    rayterra render cornell-box.txt --model path --spp 16 --denoise -o out.exr   Open Image Denoise\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
     /// Scene file in the course scene language; without it, the built-in showcase scene.
@@ -131,6 +133,17 @@ pub struct RenderArgs {
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
     pub defines: Vec<(String, String)>,
 
+    /// Denoise the finished image with Intel Open Image Denoise (its `RT` filter, guided by the
+    /// albedo and normal images). OIDN is loaded at run time from OIDN_DIR, the system's library
+    /// path, or an installed `pyoidn` (`pip install pyoidn==2.5.1.0`); see docs/denoising.md.
+    #[arg(long)]
+    pub denoise: bool,
+
+    /// Also write auxiliary images beside the output, as `NAME.albedo.exr` and so on: albedo,
+    /// normal, depth (comma-separated), at the first non-specular surface each pixel sees.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_aov)]
+    pub aov: Vec<Aov>,
+
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -139,6 +152,44 @@ pub struct RenderArgs {
 /// Parses `-D NAME=VALUE`.
 fn parse_define(text: &str) -> Result<(String, String), String> {
     scene::mitsuba::parse_define(text).map_err(|e| e.to_string())
+}
+
+/// An auxiliary image `--aov` can write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Aov {
+    /// The albedo (linear RGB in [0, 1]).
+    Albedo,
+    /// The shading normal (world space, z-up, components in [-1, 1]).
+    Normal,
+    /// The distance along the camera path (scene units, in every channel).
+    Depth,
+}
+
+impl Aov {
+    /// Every image, in the order `--aov` lists them.
+    const ALL: [Aov; 3] = [Aov::Albedo, Aov::Normal, Aov::Depth];
+
+    /// The image's name on the command line and in its file name.
+    fn name(self) -> &'static str {
+        match self {
+            Aov::Albedo => "albedo",
+            Aov::Normal => "normal",
+            Aov::Depth => "depth",
+        }
+    }
+}
+
+/// Parses one name of `--aov`.
+fn parse_aov(text: &str) -> Result<Aov, String> {
+    Aov::ALL.into_iter().find(|a| a.name() == text.trim()).ok_or_else(|| {
+        format!("unknown auxiliary image `{text}`; expected albedo, normal or depth (comma-separated)")
+    })
+}
+
+/// The file an auxiliary image is written to: `render.exr` gives `render.albedo.exr`.
+fn aov_path(output: &Path, aov: Aov) -> PathBuf {
+    let stem = output.file_stem().map_or_else(|| "render".into(), |s| s.to_string_lossy().into_owned());
+    output.with_file_name(format!("{stem}.{}.exr", aov.name()))
 }
 
 /// Parses `--model`.
@@ -321,6 +372,22 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         errln!("warning: --gamma has no effect on linear {} output", crate::render::format_name(format));
     }
 
+    // OIDN is found before any work, so that a missing library costs no render.
+    let denoiser = if args.denoise && !args.check {
+        if is_part {
+            return Err(fail(
+                "--denoise works on a whole image, not a tile or pass: merge the parts with `rayterra merge`, \
+                 then render the whole image with --denoise",
+            ));
+        }
+        Some(crate::oidn::Oidn::find().map_err(|e| fail(&e))?)
+    } else {
+        None
+    };
+    if is_part && !args.aov.is_empty() {
+        return Err(fail("--aov works on a whole image, not a tile or pass"));
+    }
+
     if args.check {
         if !args.quiet {
             let scene = &prepared.scene;
@@ -409,9 +476,41 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         let part = Part::from_portion(header, &rows, portion.pixels);
         parts::write_part(&part, &args.output).map_err(|e| fail(&e.to_string()))?;
     } else {
-        let PortionPixels::Final(pixels) = portion.pixels else {
+        let PortionPixels::Final(mut pixels) = portion.pixels else {
             return Err(fail("internal error: a whole render gave partial sums"));
         };
+        if denoiser.is_some() || !args.aov.is_empty() {
+            let aov_started = Instant::now();
+            let aovs = raytracer::render::render_aovs(&prepared, &settings, DEFAULT_AOV_SAMPLES)
+                .map_err(|e| fail(&e.to_string()))?;
+            let aov_time = aov_started.elapsed();
+            if let Some(oidn) = &denoiser {
+                let started = Instant::now();
+                pixels = oidn
+                    .denoise(w, h, &pixels, &aovs.albedo, &aovs.normal, settings.threads)
+                    .map_err(|e| fail(&e))?;
+                if !args.quiet {
+                    outln!(
+                        "denoised with Open Image Denoise ({}) in {:.2} s, its albedo and normal images in {:.2} s",
+                        oidn.path().display(),
+                        started.elapsed().as_secs_f64(),
+                        aov_time.as_secs_f64()
+                    );
+                }
+            }
+            for &aov in &args.aov {
+                let data = match aov {
+                    Aov::Albedo => aovs.albedo.clone(),
+                    Aov::Normal => aovs.normal.clone(),
+                    Aov::Depth => aovs.depth.iter().map(|&d| [d; 3]).collect(),
+                };
+                let path = aov_path(&args.output, aov);
+                write_image(&Image::new(w, h, data), &path, false).map_err(|e| fail(&e.to_string()))?;
+                if !args.quiet {
+                    outln!("wrote {}", path.display());
+                }
+            }
+        }
         write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
     }
     if let Some(checkpoint) = checkpoint {

@@ -65,6 +65,8 @@ pub mod stream {
     pub const SPPM_CAMERA: u64 = 0x0073_7070_6d63_616d;
     /// An SPPM photon.
     pub const SPPM_PHOTON: u64 = 0x7370_706d_7068_6f74;
+    /// A camera ray of the auxiliary images (albedo, normal, depth) for a denoiser.
+    pub const AOV: u64 = 0x0061_6f76_6175_7873;
     /// The seed of a run of a render after the first (see `render::run_seed`).
     pub const RUN: u64 = 0x7275_6e73;
 }

@@ -162,6 +162,17 @@ impl Bsdf {
         self.tint[DIFFUSE]
     }
 
+    /// The reflectance of the lobes with a density (diffuse and glossy): the sum of their tints
+    /// (weight times colour), each channel in [0, 1]. A denoiser's albedo at this surface.
+    #[inline]
+    pub fn smooth_albedo(&self) -> DVec3 {
+        (0..4)
+            .filter(|&l| self.in_set(l, class::SMOOTH))
+            .map(|l| self.tint[l])
+            .sum::<DVec3>()
+            .clamp(DVec3::ZERO, DVec3::ONE)
+    }
+
     /// The probability that [`Bsdf::sample`] over `set` picks a lobe of the classes `of`.
     pub fn class_probability(&self, set: u8, of: u8) -> f64 {
         let total = self.choice_total(set);

@@ -9,9 +9,11 @@
 //!
 //! The course's two models share the lobes of [`course_lobes`]; the physically based ones share
 //! the material lobes of [`bsdf`] and the light sampling of [`lights`]. Every model reports its
-//! progress and work through [`report`].
+//! progress and work through [`report`]. Beside the models, [`aov`] computes the auxiliary
+//! images (albedo, normal, depth) a denoiser reads.
 
 pub mod adaptive;
+pub mod aov;
 pub mod bsdf;
 pub mod classic;
 pub mod course_lobes;

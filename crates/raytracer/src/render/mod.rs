@@ -323,6 +323,33 @@ pub fn render_portion_resumable(
     })
 }
 
+/// The auxiliary images (albedo, normal, depth; see [`crate::integrator::aov`]) of the render
+/// `settings` describe (its size, camera and seed, on `settings.threads` threads), each pixel the
+/// mean of `samples` camera rays. The same bytes at any thread count.
+pub fn render_aovs(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    samples: u32,
+) -> Result<crate::integrator::aov::Aovs, RenderError> {
+    check_image_size(settings.width, settings.height).map_err(RenderError::ImageSize)?;
+    let threads = settings.threads.unwrap_or(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|source| RenderError::Threads { threads, source })?;
+    let camera = camera_for(scene, settings);
+    Ok(pool.install(|| {
+        crate::integrator::aov::render_aovs(
+            scene,
+            &camera,
+            settings.width,
+            settings.height,
+            settings.seed,
+            samples,
+        )
+    }))
+}
+
 /// The camera of a render: the scene's, at the settings' size, focused at `focal_dist=` or (a
 /// lens without it) on the surface seen at the image centre.
 pub fn camera_for(scene: &PreparedScene, settings: &RenderSettings) -> Camera {
