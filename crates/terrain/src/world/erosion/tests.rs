@@ -77,7 +77,7 @@ fn thermal_erosion_brings_slopes_under_the_talus_angle() {
     let grid = HeightGrid { columns: side, rows: side, cell_size: 1.0, heights };
     let params = ErosionParams {
         droplets_per_cell: 0.0,
-        thermal_passes: 400,
+        thermal_passes: 800,
         talus_degrees: 30.0,
         ..ErosionParams::default()
     };
