@@ -83,7 +83,9 @@ impl ErosionParams {
     /// [`MAX_STRENGTH`]) droplets per sample and `4 * strength` thermal passes (rounded up), the
     /// other parameters at their defaults.
     pub fn with_strength(strength: f32, seed: u64) -> Result<Self, ErosionError> {
-        if !(strength > 0.0 && strength <= MAX_STRENGTH) {
+        // Written so that NaN is refused too.
+        let valid = strength > 0.0 && strength <= MAX_STRENGTH;
+        if !valid {
             return Err(ErosionError::BadParameter {
                 name: "strength",
                 value: f64::from(strength),
