@@ -106,7 +106,7 @@ pub fn world_from_layers(layers: Vec<Layer>) -> Result<World, TransferError> {
         Some(albedo_map) => Some(UnlitLayers { albedo_map, sky: pool.sky_box("clear")? }),
         None => None,
     };
-    Ok(World { heightmap, colour_map, detail_map, sky, water, unlit, elevation: None })
+    Ok(World { heightmap, colour_map, detail_map, sky, water, unlit, elevation: None, erosion: None })
 }
 
 fn malformed(name: &str, width: u32, height: u32, expected: &'static str) -> TransferError {

@@ -11,6 +11,7 @@ use terrain::headless::HeadlessRenderer;
 use terrain::render::{Backend, FrameView, Gpu, GpuMemory};
 use terrain::window::{self, Notice, WindowOptions};
 use terrain::world::dem::{self, WaterLevel};
+use terrain::world::erosion::{self, ErosionParams};
 use terrain::world::procedural::{self, ProceduralOptions, Progress, Stage};
 use terrain::world::{self as terrain_world, Heightmap, World};
 use terrain::{Look, SceneConfig, Settings};
@@ -28,7 +29,8 @@ fn after_help() -> String {
          rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  \
          rayterra terrain --heightmap N42E001.hgt --water-level 1500\n  \
          rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3\n  \
-         rayterra terrain --look course\n  rayterra terrain --settings sunset.toml --screenshot sunset.png",
+         rayterra terrain --look course\n  rayterra terrain --erode 1 --seed 2\n  \
+         rayterra terrain --heightmap dem.tif --erode 2 --export-heightmap eroded.tif\n  rayterra terrain --settings sunset.toml --screenshot sunset.png",
         controls::help()
     )
 }
@@ -70,6 +72,20 @@ pub struct TerrainArgs {
     #[arg(long, value_name = "N",
           value_parser = clap::value_parser!(u32).range(2..=i64::from(terrain_world::MAX_HEIGHTMAP_SIDE)))]
     max_size: Option<u32>,
+
+    /// Erode the heights before drawing them (any heightmap: the procedural island, an image or
+    /// elevation data): water droplets carve valleys and leave sediment, then steep slopes slide
+    /// to the talus angle. STRENGTH (greater than 0, at most 10) is the droplets a sample; 1 is
+    /// a good start. The --seed seeds the droplets. Default: no erosion.
+    #[arg(long, value_name = "STRENGTH", value_parser = parse_strength, conflicts_with = "assets",
+          allow_hyphen_values = true)]
+    erode: Option<f32>,
+
+    /// Write the heights (eroded with --erode) to FILE and exit: .tif as 32-bit float samples
+    /// (metres for elevation data, world units otherwise) or .png as 16-bit grey (which
+    /// --heightmap reads back as the same heights).
+    #[arg(long, value_name = "OUT.tif|OUT.png", conflicts_with = "screenshot")]
+    export_heightmap: Option<PathBuf>,
 
     /// Seed of the procedural world: the same seed always gives the same island, textures and sky.
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -172,6 +188,16 @@ fn parse_positive(text: &str) -> Result<f64, String> {
         .ok_or_else(|| format!("`{text}` is not a positive number"))
 }
 
+fn parse_strength(text: &str) -> Result<f32, String> {
+    let strength: f32 = text.parse().map_err(|_| format!("`{text}` is not a number"))?;
+    ErosionParams::with_strength(strength, 0).map(|_| strength).map_err(|_| {
+        format!(
+            "{text} is out of range: the strength must be greater than 0 and at most {}",
+            erosion::MAX_STRENGTH
+        )
+    })
+}
+
 fn parse_look(text: &str) -> Result<Look, String> {
     text.parse()
 }
@@ -208,7 +234,8 @@ pub fn run(args: TerrainArgs) -> Result<(), ExitCode> {
 }
 
 fn execute(args: TerrainArgs) -> Result<(), String> {
-    let windowed = args.screenshot.is_none() && args.export_assets.is_none();
+    let windowed =
+        args.screenshot.is_none() && args.export_assets.is_none() && args.export_heightmap.is_none();
     // Say so before any work when there is nowhere to open the window.
     if windowed && !window::display_available() {
         return Err(no_display_message("neither DISPLAY nor WAYLAND_DISPLAY is set"));
@@ -217,8 +244,16 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         // Refuse an unwritable format or folder before any work.
         terrain::output::check_output(out).map_err(|error| error.to_string())?;
     }
+    if let Some(out) = &args.export_heightmap {
+        terrain_world::export::HeightFormat::for_path(out).map_err(|error| error.to_string())?;
+    }
     let settings = load_settings(&args)?;
     let (world, config) = load_world(&args)?;
+    if let Some(out) = &args.export_heightmap {
+        terrain_world::export::save_heightmap(&world, &config, out).map_err(|e| e.to_string())?;
+        outln!("wrote {} ({}x{} heights)", out.display(), world.heightmap.columns(), world.heightmap.rows());
+        return Ok(());
+    }
     if let Some(dir) = &args.export_assets {
         let written = terrain_world::export::save_course_folder(&world, dir).map_err(|e| e.to_string())?;
         outln!("wrote {} files to {}", written.len(), dir.display());
@@ -420,10 +455,12 @@ fn load_elevation(args: &TerrainArgs, path: &Path) -> Result<(World, SceneConfig
     let read = started.elapsed();
     eprintln!("elevation: {} ({})", loaded.describe(), seconds(read));
     let dem::DemScene { heightmap, config, info } = loaded.scene;
+    let (heightmap, maps) = erode_if_asked(args, heightmap, &config)?;
     let painting = spinner("painting the colour map".to_string());
     let mut world = procedural::dress_heightmap(heightmap, args.seed, &config, &mut |_| {});
     painting.finish_and_clear();
     world.elevation = Some(info);
+    world.erosion = maps;
     eprintln!(
         "world: elevation data {}, {}x{} heightmap ({})",
         path.display(),
@@ -461,14 +498,35 @@ fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, St
         bar.set_position((progress.overall() * 1000.0).round() as u64);
         bar.set_message(progress.stage.describe());
     };
-    let world = match &args.heightmap {
-        Some(path) => {
+    let world = match (&args.heightmap, args.erode) {
+        (Some(path), None) => {
             progress(Progress { stage: Stage::Heightmap, done: 0.0 });
             Heightmap::load(path)
                 .map(|heightmap| procedural::dress_heightmap(heightmap, args.seed, config, &mut progress))
                 .map_err(|error| error.to_string())
         }
-        None => {
+        (Some(path), Some(_)) => {
+            progress(Progress { stage: Stage::Heightmap, done: 0.0 });
+            let heightmap = Heightmap::load(path).map_err(|error| error.to_string());
+            bar.finish_and_clear();
+            let (heightmap, maps) = erode_if_asked(args, heightmap?, config)?;
+            let mut world = procedural::dress_heightmap(heightmap, args.seed, config, &mut |_| {});
+            world.erosion = maps;
+            Ok(world)
+        }
+        (None, Some(_)) => {
+            progress(Progress { stage: Stage::Heightmap, done: 0.0 });
+            let heightmap = procedural::island_heightmap(args.seed, args.grid, config, &mut |done| {
+                progress(Progress { stage: Stage::Heightmap, done })
+            });
+            bar.finish_and_clear();
+            let (heightmap, maps) =
+                erode_if_asked(args, heightmap.map_err(|error| error.to_string())?, config)?;
+            let mut world = procedural::dress_heightmap(heightmap, args.seed, config, &mut |_| {});
+            world.erosion = maps;
+            Ok(world)
+        }
+        (None, None) => {
             let options = ProceduralOptions { seed: args.seed, heightmap_size: args.grid };
             procedural::generate(options, config, &mut progress).map_err(|error| error.to_string())
         }
@@ -487,6 +545,38 @@ fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, St
         seconds(started.elapsed())
     );
     Ok(world)
+}
+
+/// The heightmap eroded as `--erode` asks (with a progress bar), with the erosion's maps; as it
+/// is without `--erode`.
+fn erode_if_asked(
+    args: &TerrainArgs,
+    heightmap: Heightmap,
+    config: &SceneConfig,
+) -> Result<(Heightmap, Option<erosion::ErosionMaps>), String> {
+    let Some(strength) = args.erode else {
+        return Ok((heightmap, None));
+    };
+    let params = ErosionParams::with_strength(strength, u64::from(args.seed)).map_err(|e| e.to_string())?;
+    let started = Instant::now();
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} eroding the heights: {bar:30} {percent:>3}% [{elapsed}]")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.enable_steady_tick(Duration::from_millis(100));
+    let eroded = erosion::erode_heightmap(&heightmap, config, &params, &mut |done| {
+        bar.set_position((done * 1000.0).round() as u64)
+    });
+    bar.finish_and_clear();
+    let (eroded, maps) = eroded.map_err(|error| error.to_string())?;
+    errln!(
+        "erosion: strength {strength}, {}x{} samples ({})",
+        eroded.columns(),
+        eroded.rows(),
+        seconds(started.elapsed())
+    );
+    Ok((eroded, Some(maps)))
 }
 
 fn spinner(message: String) -> ProgressBar {

@@ -34,6 +34,7 @@ fn world(level: impl Fn(u32, u32) -> f32, land: [u8; 3], sky: [u8; 3]) -> World 
         water: flat([0, 0, 255], 8),
         unlit: None,
         elevation: None,
+        erosion: None,
     }
 }
 

@@ -52,6 +52,7 @@ pub fn load_course_folder(dir: &Path) -> Result<World, WorldError> {
         water: read_rgba(path(8))?,
         unlit: None,
         elevation: None,
+        erosion: None,
     })
 }
 

@@ -7,7 +7,8 @@ use image::{DynamicImage, ImageFormat};
 
 use super::World;
 use super::assets::ASSET_FILES;
-use crate::output::{SaveError, save_image};
+use crate::config::SceneConfig;
+use crate::output::{SaveError, save_image, write_file};
 
 /// Writes `world` into `dir` (created if needed) under the course's file names, as BMP files.
 /// The heightmap is written as 8-bit grey levels (rounded), like the course's. Each file is
@@ -40,6 +41,67 @@ pub fn save_course_folder(world: &World, dir: &Path) -> Result<Vec<PathBuf>, Sav
     Ok(written)
 }
 
+/// How [`save_heightmap`] writes the heights, from the file's extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HeightFormat {
+    /// `.tif` or `.tiff`: one 32-bit float sample a pixel, the height in metres for elevation
+    /// data and in world units (y) otherwise; uncompressed, no geographic tags.
+    FloatTiff,
+    /// `.png`: 16-bit grey, the heightmap's levels times 257 (`--heightmap` reads it back as the
+    /// same levels).
+    Png16,
+}
+
+impl HeightFormat {
+    /// The format `path`'s extension names (case-insensitive), or an error naming the file.
+    pub fn for_path(path: &Path) -> Result<Self, SaveError> {
+        let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("tif" | "tiff") => Ok(Self::FloatTiff),
+            Some("png") => Ok(Self::Png16),
+            _ => Err(SaveError::Io {
+                path: path.to_path_buf(),
+                source: std::io::Error::other(
+                    "a heightmap is written as .tif (32-bit float) or .png (16-bit)",
+                ),
+            }),
+        }
+    }
+}
+
+/// Writes the heights of `world` (placed with `config`) to `path`, whole or not at all, in the
+/// format of its extension ([`HeightFormat`]). Row 0 is the far (-z, northern) row.
+pub fn save_heightmap(world: &World, config: &SceneConfig, path: &Path) -> Result<(), SaveError> {
+    let map = &world.heightmap;
+    match HeightFormat::for_path(path)? {
+        HeightFormat::Png16 => save_image(&DynamicImage::ImageLuma16(map.to_image()), path, ImageFormat::Png),
+        HeightFormat::FloatTiff => {
+            let height = |level: f32| {
+                let y = config.height_of_level(level);
+                match &world.elevation {
+                    // Back to metres: the inverse of `ElevationInfo::world_height`.
+                    Some(info) => {
+                        (f64::from(y) * info.metres_per_unit / info.vertical_exaggeration + info.base_metres)
+                            as f32
+                    }
+                    None => y,
+                }
+            };
+            let heights: Vec<f32> = map.levels().map(height).collect();
+            let mut bytes = std::io::Cursor::new(Vec::new());
+            let failed = |error: tiff::TiffError| SaveError::Io {
+                path: path.to_path_buf(),
+                source: std::io::Error::other(error.to_string()),
+            };
+            tiff::encoder::TiffEncoder::new(&mut bytes)
+                .map_err(failed)?
+                .write_image::<tiff::encoder::colortype::Gray32Float>(map.columns(), map.rows(), &heights)
+                .map_err(failed)?;
+            write_file(path, bytes.get_ref())
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -62,5 +124,31 @@ mod tests {
             assert!((a - b).abs() <= 0.5 + 1e-3, "{a} vs {b}");
         }
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn heights_are_written_as_float_tiff_and_sixteen_bit_png() {
+        let config = SceneConfig::default();
+        let world =
+            generate(ProceduralOptions { seed: 2, heightmap_size: 20 }, &config, &mut |_| {}).expect("valid");
+        let dir = tempfile::tempdir().expect("temporary folder");
+        let png = dir.path().join("h.png");
+        save_heightmap(&world, &config, &png).expect("writable");
+        let back = crate::world::Heightmap::load(&png).expect("loadable");
+        for (a, b) in back.levels().zip(world.heightmap.levels()) {
+            assert!((a - b).abs() <= 0.5 / 257.0 + 1e-4, "{a} vs {b}");
+        }
+        let tif = dir.path().join("h.TIF");
+        save_heightmap(&world, &config, &tif).expect("writable");
+        let mut decoder =
+            tiff::decoder::Decoder::new(std::fs::File::open(&tif).expect("written")).expect("tiff");
+        assert_eq!(decoder.dimensions().expect("size"), (20, 20));
+        let tiff::decoder::DecodingResult::F32(heights) = decoder.read_image().expect("decodes") else {
+            panic!("not float samples");
+        };
+        let expected: Vec<f32> = world.heightmap.levels().map(|l| config.height_of_level(l)).collect();
+        assert_eq!(heights, expected);
+        let error = save_heightmap(&world, &config, &dir.path().join("h.jpg")).expect_err("refused");
+        assert!(error.to_string().contains("h.jpg"), "{error}");
     }
 }

@@ -7,6 +7,7 @@
 pub mod assets;
 pub mod chunk;
 pub mod dem;
+pub mod erosion;
 pub mod export;
 pub mod heightfield;
 pub mod heightmap;
@@ -172,6 +173,9 @@ pub struct World {
     /// What the world keeps of the elevation data it was made from (metres, water, the mask of
     /// the samples the file had no data for), for worlds made from a DEM ([`dem`]).
     pub elevation: Option<dem::place::ElevationInfo>,
+    /// The flow and deposition maps of the erosion that shaped the heights, for the ground
+    /// materials; `None` when the heights were not eroded ([`erosion`]).
+    pub erosion: Option<erosion::ErosionMaps>,
 }
 
 /// Layers of a world without the light painted into them.
@@ -202,6 +206,7 @@ impl World {
         let heights = self.heightmap.levels().len() * self.heightmap.bytes_per_sample();
         let unlit = self.unlit.as_ref().map_or(0, |u| image(&u.albedo_map) + sky(&u.sky));
         let voids = self.elevation.as_ref().map_or(0, |e| e.voids.len());
+        let erosion = self.erosion.as_ref().map_or(0, erosion::ErosionMaps::memory_bytes);
         heights
             + image(&self.colour_map)
             + image(&self.detail_map)
@@ -209,6 +214,7 @@ impl World {
             + image(&self.water)
             + unlit
             + voids
+            + erosion
     }
 }
 

@@ -122,6 +122,7 @@ pub fn marker_world(detail_grey: u8) -> World {
         water: flat([0, 0, 255], 8),
         unlit: None,
         elevation: None,
+        erosion: None,
     }
 }
 

@@ -131,7 +131,7 @@ pub fn dress_heightmap(
     let water = water_texture(seed, WATER_TEXTURE_SIZE);
     progress(Progress { stage: Stage::Water, done: 1.0 });
     let unlit = Some(UnlitLayers { albedo_map, sky: clear_sky });
-    World { heightmap, colour_map, detail_map, sky, water, unlit, elevation: None }
+    World { heightmap, colour_map, detail_map, sky, water, unlit, elevation: None, erosion: None }
 }
 
 #[cfg(test)]

@@ -1,0 +1,279 @@
+//! The erosion itself, on a plain grid of heights: parameters, the droplet batches over tiles,
+//! the thermal passes and the maps (see the module above for the conventions).
+
+use rayon::prelude::*;
+
+use super::droplet::{DropletParams, Tile};
+use super::random::SplitMix64;
+use super::{flow, thermal};
+
+/// Side of the square tiles the droplets of a batch run on, in samples. A droplet that leaves
+/// its tile stops and leaves its sediment where it is; the tiles move between batches so their
+/// edges leave no mark.
+pub const TILE_SIDE: u32 = 256;
+
+/// Number of batches the droplets are split into (each over its own shifted tiling).
+pub const BATCHES: u32 = 8;
+
+/// Largest accepted STRENGTH (droplets and thermal passes scale with it).
+pub const MAX_STRENGTH: f32 = 10.0;
+
+/// A grid of heights with its horizontal spacing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeightGrid {
+    /// Samples per row.
+    pub columns: u32,
+    /// Number of rows.
+    pub rows: u32,
+    /// Distance between neighbouring samples, in the units of the heights.
+    pub cell_size: f32,
+    /// Heights, row by row from the far (-z) row.
+    pub heights: Vec<f32>,
+}
+
+/// Why erosion could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ErosionError {
+    /// A parameter out of its range.
+    #[error("erosion parameter {name} = {value} is out of range: {expected}")]
+    BadParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What is allowed.
+        expected: &'static str,
+    },
+    /// A grid whose heights do not match its size, or that is too small.
+    #[error("cannot erode a {columns}x{rows} grid of {len} heights with cell size {cell_size}")]
+    BadGrid {
+        /// Samples per row.
+        columns: u32,
+        /// Rows.
+        rows: u32,
+        /// Heights given.
+        len: usize,
+        /// The cell size.
+        cell_size: f32,
+    },
+    /// The eroded heights do not make a heightmap.
+    #[error("the eroded heights are not a heightmap: {0}")]
+    Heightmap(String),
+}
+
+/// Every parameter of [`erode`]. Rates are fractions per droplet step or per thermal pass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErosionParams {
+    /// Seed of the droplets' random start positions: the same seed gives the same heights.
+    pub seed: u64,
+    /// Droplets released per grid sample (0 for no hydraulic erosion).
+    pub droplets_per_cell: f32,
+    /// The droplets' parameters.
+    pub droplet: DropletParams,
+    /// Thermal passes after the droplets (0 for none).
+    pub thermal_passes: u32,
+    /// The steepest stable slope, in degrees from the horizontal (0 to 89).
+    pub talus_degrees: f32,
+    /// Fraction of a slope's excess over the talus slope moved per thermal pass (0 to 0.5).
+    pub thermal_rate: f32,
+}
+
+impl ErosionParams {
+    /// The parameters of `--erode STRENGTH`: `strength` (greater than 0, at most
+    /// [`MAX_STRENGTH`]) droplets per sample and `4 * strength` thermal passes (rounded up), the
+    /// other parameters at their defaults.
+    pub fn with_strength(strength: f32, seed: u64) -> Result<Self, ErosionError> {
+        // Written so that NaN is refused too.
+        let valid = strength > 0.0 && strength <= MAX_STRENGTH;
+        if !valid {
+            return Err(ErosionError::BadParameter {
+                name: "strength",
+                value: f64::from(strength),
+                expected: "greater than 0 and at most 10",
+            });
+        }
+        Ok(Self {
+            seed,
+            droplets_per_cell: strength,
+            thermal_passes: (4.0 * strength).ceil() as u32,
+            ..Self::default()
+        })
+    }
+
+    /// Checks every parameter's range.
+    pub fn validate(&self) -> Result<(), ErosionError> {
+        let check = |name, value: f32, ok: bool, expected| {
+            if ok && value.is_finite() {
+                Ok(())
+            } else {
+                Err(ErosionError::BadParameter { name, value: f64::from(value), expected })
+            }
+        };
+        let d = &self.droplet;
+        check(
+            "droplets_per_cell",
+            self.droplets_per_cell,
+            (0.0..=100.0).contains(&self.droplets_per_cell),
+            "0 to 100",
+        )?;
+        check("talus_degrees", self.talus_degrees, (0.0..89.0).contains(&self.talus_degrees), "0 to 89")?;
+        check("thermal_rate", self.thermal_rate, (0.0..=0.5).contains(&self.thermal_rate), "0 to 0.5")?;
+        check("inertia", d.inertia, (0.0..1.0).contains(&d.inertia), "0 to less than 1")?;
+        check("capacity", d.capacity, d.capacity >= 0.0, "0 or more")?;
+        check("min_capacity", d.min_capacity, d.min_capacity >= 0.0, "0 or more")?;
+        check("erode_rate", d.erode_rate, (0.0..=1.0).contains(&d.erode_rate), "0 to 1")?;
+        check("deposit_rate", d.deposit_rate, (0.0..=1.0).contains(&d.deposit_rate), "0 to 1")?;
+        check("evaporation", d.evaporation, (0.0..1.0).contains(&d.evaporation), "0 to less than 1")?;
+        check("gravity", d.gravity, d.gravity >= 0.0, "0 or more")?;
+        let steps = d.max_steps as f32;
+        check("max_steps", steps, (1..=1000).contains(&d.max_steps), "1 to 1000")?;
+        let radius = d.radius as f32;
+        check("radius", radius, (1..=8).contains(&d.radius), "1 to 8")?;
+        Ok(())
+    }
+}
+
+impl Default for ErosionParams {
+    /// One droplet a sample and four thermal passes at a talus angle of 40 degrees.
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            droplets_per_cell: 1.0,
+            droplet: DropletParams::default(),
+            thermal_passes: 4,
+            talus_degrees: 40.0,
+            thermal_rate: 0.5,
+        }
+    }
+}
+
+/// What erosion leaves besides the heights, for the ground materials: one value a sample, in the
+/// grid's order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ErosionMaps {
+    /// Samples per row.
+    pub columns: u32,
+    /// Number of rows.
+    pub rows: u32,
+    /// Flow accumulation of the eroded heights: how many samples (itself included) drain through
+    /// each sample, following the steepest descent ([`flow::accumulation`]).
+    pub flow: Vec<f32>,
+    /// Height gained by deposition (eroded minus original height where positive, else 0), in the
+    /// units of the heights.
+    pub deposition: Vec<f32>,
+}
+
+impl ErosionMaps {
+    /// Bytes of memory the maps take.
+    pub fn memory_bytes(&self) -> usize {
+        (self.flow.len() + self.deposition.len()) * std::mem::size_of::<f32>()
+    }
+}
+
+/// Eroded heights with their maps.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Eroded {
+    /// The new heights (same size and cell size).
+    pub grid: HeightGrid,
+    /// Flow and deposition.
+    pub maps: ErosionMaps,
+}
+
+/// Erodes `grid` with `params`: hydraulic erosion by droplets, then thermal erosion, then the
+/// flow and deposition maps. Calls `progress` with the fraction done (0 to 1) from the calling
+/// thread. The result depends on nothing but the arguments (not on the thread count).
+pub fn erode(
+    grid: &HeightGrid,
+    params: &ErosionParams,
+    progress: &mut dyn FnMut(f32),
+) -> Result<Eroded, ErosionError> {
+    params.validate()?;
+    let (columns, rows) = (grid.columns, grid.rows);
+    if columns < 2
+        || rows < 2
+        || grid.heights.len() != columns as usize * rows as usize
+        || !(grid.cell_size.is_finite() && grid.cell_size > 0.0)
+    {
+        return Err(ErosionError::BadGrid {
+            columns,
+            rows,
+            len: grid.heights.len(),
+            cell_size: grid.cell_size,
+        });
+    }
+    // The droplets and the talus work in cell units: heights divided by the cell size, so that a
+    // slope is the height difference between neighbours.
+    let scale = grid.cell_size;
+    let mut heights: Vec<f32> = grid.heights.par_iter().map(|&h| h / scale).collect();
+    // Progress counts batches and passes; the maps at the end are one more.
+    let total_steps = (BATCHES + params.thermal_passes + 1) as f32;
+    let mut step = 0.0;
+    progress(0.0);
+    for batch in 0..BATCHES {
+        droplet_batch(&mut heights, columns, rows, params, batch);
+        step += 1.0;
+        progress(step / total_steps);
+    }
+    let talus = params.talus_degrees.to_radians().tan();
+    let mut spare = vec![0.0f32; heights.len()];
+    let mut moves = vec![(0.0f32, 0.0f32); heights.len()];
+    for _ in 0..params.thermal_passes {
+        thermal::pass(&heights, &mut spare, &mut moves, columns, rows, talus, params.thermal_rate);
+        std::mem::swap(&mut heights, &mut spare);
+        step += 1.0;
+        progress(step / total_steps);
+    }
+    drop((spare, moves));
+    heights.par_iter_mut().for_each(|h| *h *= scale);
+    let flow = flow::accumulation(&heights, columns, rows);
+    let deposition = heights.par_iter().zip(&grid.heights).map(|(&new, &old)| (new - old).max(0.0)).collect();
+    progress(1.0);
+    Ok(Eroded {
+        grid: HeightGrid { columns, rows, cell_size: grid.cell_size, heights },
+        maps: ErosionMaps { columns, rows, flow, deposition },
+    })
+}
+
+/// One batch of droplets over a tiling shifted by an offset drawn from the seed and the batch.
+/// Each tile is copied out, eroded by its own droplets with its own random stream, and written
+/// back in the tiles' order: nothing depends on which thread ran which tile.
+fn droplet_batch(heights: &mut [f32], columns: u32, rows: u32, params: &ErosionParams, batch: u32) {
+    let mut offsets = SplitMix64::new(params.seed ^ 0x6572_6f73_696f_6e00 ^ u64::from(batch));
+    let (dx, dy) = (offsets.below(TILE_SIDE), offsets.below(TILE_SIDE));
+    let starts = |offset: u32, length: u32| -> Vec<(u32, u32)> {
+        let mut cuts = vec![0];
+        let mut cut = offset;
+        while cut < length {
+            if cut > 0 {
+                cuts.push(cut);
+            }
+            cut += TILE_SIDE;
+        }
+        cuts.push(length);
+        cuts.windows(2).filter(|w| w[1] > w[0]).map(|w| (w[0], w[1] - w[0])).collect()
+    };
+    let (xs, ys) = (starts(dx, columns), starts(dy, rows));
+    let tiles: Vec<(u32, u32, u32, u32)> =
+        ys.iter().flat_map(|&(y, h)| xs.iter().map(move |&(x, w)| (x, y, w, h))).collect();
+    let source: &[f32] = heights;
+    let per_batch = params.droplets_per_cell / BATCHES as f32;
+    let done: Vec<Vec<f32>> = tiles
+        .par_iter()
+        .enumerate()
+        .map(|(index, &(x, y, w, h))| {
+            let mut tile = Tile::copy_from(source, columns, x, y, w, h);
+            let droplets = (per_batch * (w * h) as f32).round() as u64;
+            let stream =
+                params.seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (u64::from(batch) << 40) ^ index as u64;
+            let mut random = SplitMix64::new(stream);
+            tile.run(droplets, &params.droplet, &mut random);
+            tile.into_heights()
+        })
+        .collect();
+    for (&(x, y, w, _), tile) in tiles.iter().zip(&done) {
+        for (r, row) in tile.chunks_exact(w as usize).enumerate() {
+            let start = (y as usize + r) * columns as usize + x as usize;
+            heights[start..start + w as usize].copy_from_slice(row);
+        }
+    }
+}
