@@ -5,24 +5,9 @@ use std::path::{Path, PathBuf};
 
 use terrain::world::dem::{self, Spacing};
 
-/// The shared folder, or `None` after a loud skip (a failure under CI).
+/// The shared elevation models, or `None` after a loud skip (a failure under CI).
 fn shared() -> Option<PathBuf> {
-    // `../shared` beside the repository's root; the nearest such folder above it, so that a git
-    // worktree in a subfolder finds it too.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let found = root
-        .ancestors()
-        .skip(1)
-        .map(|dir| dir.join("shared/terrain-dem"))
-        .find(|dir| dir.join("SOURCES.md").is_file());
-    if let Some(dir) = found {
-        return Some(dir);
-    }
-    let reason =
-        format!("the elevation models are not in shared/terrain-dem beside {} or above it", root.display());
-    assert!(std::env::var("CI").as_deref() != Ok("true"), "CI=true, so this cannot be skipped: {reason}");
-    test_skips::skip("terrain DEM tests", &reason);
-    None
+    test_skips::shared_data(Path::new(env!("CARGO_MANIFEST_DIR")), "terrain-dem", "terrain DEM tests")
 }
 
 /// What SOURCES.md says of a file.

@@ -7,7 +7,7 @@
 //! Whether a skip is allowed at all (it is not under CI) is the caller's decision.
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU32, Ordering};
 
 /// The folder where the skips of the `cargo test` process that ran this test binary are
@@ -38,6 +38,27 @@ fn parent_id() -> u32 {
 #[cfg(not(unix))]
 fn parent_id() -> u32 {
     0
+}
+
+/// The folder `shared/SUB` of the shared test data, found beside the repository whose crate is at
+/// `manifest_dir` (`env!("CARGO_MANIFEST_DIR")` of the caller) or in the nearest folder above it
+/// (so that a git worktree in a subfolder finds it too), known by its `SOURCES.md`. Without it,
+/// the test group `group` is skipped loudly and `None` returned; under CI (`CI=true`) that is a
+/// failure instead.
+pub fn shared_data(manifest_dir: &Path, sub: &str, group: &str) -> Option<PathBuf> {
+    let root = manifest_dir.join("../..");
+    let found = root
+        .ancestors()
+        .skip(1)
+        .map(|dir| dir.join("shared").join(sub))
+        .find(|dir| dir.join("SOURCES.md").is_file());
+    if found.is_some() {
+        return found;
+    }
+    let reason = format!("the test data is not in shared/{sub} beside {} or above it", root.display());
+    assert!(std::env::var("CI").as_deref() != Ok("true"), "CI=true, so this cannot be skipped: {reason}");
+    skip(group, &reason);
+    None
 }
 
 /// Skips a test group: prints `==== SKIPPED group: reason ====` to the terminal (not through the
