@@ -4,51 +4,13 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn under_ci() -> bool {
-    std::env::var("CI").is_ok_and(|value| !value.is_empty() && value != "false" && value != "0")
-}
-
-fn rayterra(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rayterra"))
-        .arg("terrain")
-        .args(args)
-        // No window may open from these tests.
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env_remove("WAYLAND_SOCKET")
-        .env_remove("XDG_RUNTIME_DIR")
-        .output()
-        .expect("rayterra runs")
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
+mod terrain_common;
+use terrain_common::{assert_fails, no_gpu, rayterra, stderr, under_ci};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("terrain-cli");
     std::fs::create_dir_all(&dir).expect("scratch folder");
     dir.join(name)
-}
-
-/// Whether `output` failed for want of a GPU; if so the test is skipped loudly (or fails
-/// under CI).
-fn no_gpu(output: &Output) -> bool {
-    let text = stderr(output);
-    let missing = !output.status.success() && text.contains("no graphics adapter");
-    if missing {
-        assert!(!under_ci(), "CI=true, so this cannot be skipped: {text}");
-        test_skips::skip("rayterra terrain GPU tests", &format!("no Vulkan adapter: {text}"));
-    }
-    missing
-}
-
-/// Asserts a failure with `code` whose message contains `needle`, and no panic.
-fn assert_fails(output: &Output, code: i32, needle: &str) {
-    let text = stderr(output);
-    assert_eq!(output.status.code(), Some(code), "stderr: {text}");
-    assert!(text.contains(needle), "expected `{needle}` in: {text}");
-    assert!(!text.contains("panicked"), "it panicked: {text}");
 }
 
 #[test]

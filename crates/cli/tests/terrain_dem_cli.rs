@@ -2,27 +2,8 @@
 //! errors (exit 1, the file named) for broken files.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn under_ci() -> bool {
-    std::env::var("CI").is_ok_and(|value| !value.is_empty() && value != "false" && value != "0")
-}
-
-fn rayterra(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rayterra"))
-        .arg("terrain")
-        .args(args)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env_remove("WAYLAND_SOCKET")
-        .env_remove("XDG_RUNTIME_DIR")
-        .output()
-        .expect("rayterra runs")
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
+mod terrain_common;
+use terrain_common::{assert_fails_with, no_gpu, rayterra, stderr};
 
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("terrain-dem-cli");
@@ -37,15 +18,6 @@ fn shared() -> Option<PathBuf> {
         "terrain-dem",
         "rayterra terrain DEM tests",
     )
-}
-
-fn assert_fails(output: &Output, code: i32, needles: &[&str]) {
-    let text = stderr(output);
-    assert_eq!(output.status.code(), Some(code), "stderr: {text}");
-    for needle in needles {
-        assert!(text.contains(needle), "expected `{needle}` in: {text}");
-    }
-    assert!(!text.contains("panicked"), "it panicked: {text}");
 }
 
 #[test]
@@ -64,12 +36,10 @@ fn renders_a_real_place_with_a_sensible_start_view() {
         "--backend",
         "vulkan",
     ]);
-    let text = stderr(&output);
-    if !output.status.success() && text.contains("no graphics adapter") {
-        assert!(!under_ci(), "CI=true, so this cannot be skipped: {text}");
-        test_skips::skip("rayterra terrain GPU tests", &format!("no Vulkan adapter: {text}"));
+    if no_gpu(&output) {
         return;
     }
+    let text = stderr(&output);
     assert!(output.status.success(), "{text}");
     assert!(text.contains("elevation: GeoTiff 465x572 samples, cell 73.86"), "{text}");
     assert!(text.contains("no sea"), "{text}");
@@ -101,17 +71,17 @@ fn broken_elevation_files_are_named_with_exit_one() {
 
     let hgt = scratch("N10E010.hgt");
     std::fs::write(&hgt, vec![0u8; 1201 * 1201 * 2 - 2]).expect("write");
-    assert_fails(&run(&hgt), 1, &["N10E010.hgt", "this file is 2884800 bytes"]);
+    assert_fails_with(&run(&hgt), 1, &["N10E010.hgt", "this file is 2884800 bytes"]);
 
     let grid = scratch("broken.asc");
     std::fs::write(&grid, "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 five 6\n")
         .expect("write");
-    assert_fails(&run(&grid), 1, &["broken.asc", "line 7 (row 2): `five` is not a number"]);
+    assert_fails_with(&run(&grid), 1, &["broken.asc", "line 7 (row 2): `five` is not a number"]);
 
     let short = scratch("short.asc");
     std::fs::write(&short, "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 5 6\n")
         .expect("write");
-    assert_fails(&run(&short), 1, &["short.asc", "row 3 is missing"]);
+    assert_fails_with(&run(&short), 1, &["short.asc", "row 3 is missing"]);
 
     // A 16-bit PNG whose pixels are 8-bit: the header's bit depth does not match the data.
     let png = scratch("lying16.png");
@@ -123,14 +93,14 @@ fn broken_elevation_files_are_named_with_exit_one() {
     let crc = crc32(&bytes[12..29]);
     bytes[29..33].copy_from_slice(&crc.to_be_bytes());
     std::fs::write(&png, &bytes).expect("write");
-    assert_fails(&run(&png), 1, &["lying16.png"]);
+    assert_fails_with(&run(&png), 1, &["lying16.png"]);
 
     if let Some(dir) = shared() {
         // A real GeoTIFF cut short: its strips point past the end.
         let whole = std::fs::read(dir.join("vinschgau_f32_lzw_utm32n_nodata.tif")).expect("readable");
         let cut = scratch("cut.tif");
         std::fs::write(&cut, &whole[..whole.len() / 2]).expect("write");
-        assert_fails(&run(&cut), 1, &["cut.tif", "past the end of the file"]);
+        assert_fails_with(&run(&cut), 1, &["cut.tif", "past the end of the file"]);
     }
     assert!(!out.exists());
 }
@@ -142,9 +112,9 @@ fn elevation_options_are_checked() {
         all.extend_from_slice(extra);
         rayterra(&all)
     };
-    assert_fails(&args(&["--water-level", "deep"]), 2, &["neither a height in metres nor `none`"]);
-    assert_fails(&args(&["--vertical-exaggeration", "0"]), 2, &["not a positive number"]);
-    assert_fails(&args(&["--max-size", "9000"]), 2, &["9000"]);
+    assert_fails_with(&args(&["--water-level", "deep"]), 2, &["neither a height in metres nor `none`"]);
+    assert_fails_with(&args(&["--vertical-exaggeration", "0"]), 2, &["not a positive number"]);
+    assert_fails_with(&args(&["--max-size", "9000"]), 2, &["9000"]);
 }
 
 /// PNG's CRC-32 of `bytes`.

@@ -3,46 +3,24 @@
 //! for a bad strength.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn under_ci() -> bool {
-    std::env::var("CI").is_ok_and(|value| !value.is_empty() && value != "false" && value != "0")
-}
+mod terrain_common;
+use terrain_common::{assert_fails, no_gpu, rayterra, stderr, terrain_command};
 
 fn rayterra_with_threads(threads: Option<usize>, args: &[&str]) -> Output {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_rayterra"));
-    command
-        .arg("terrain")
-        .args(args)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env_remove("WAYLAND_SOCKET")
-        .env_remove("XDG_RUNTIME_DIR");
+    let mut command = terrain_command();
+    command.args(args);
     if let Some(threads) = threads {
         command.env("RAYON_NUM_THREADS", threads.to_string());
     }
     command.output().expect("rayterra runs")
 }
 
-fn rayterra(args: &[&str]) -> Output {
-    rayterra_with_threads(None, args)
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("terrain-erosion-cli");
     std::fs::create_dir_all(&dir).expect("scratch folder");
     dir.join(name)
-}
-
-fn assert_fails(output: &Output, code: i32, needle: &str) {
-    let text = stderr(output);
-    assert_eq!(output.status.code(), Some(code), "stderr: {text}");
-    assert!(text.contains(needle), "expected `{needle}` in: {text}");
-    assert!(!text.contains("panicked"), "it panicked: {text}");
 }
 
 #[test]
@@ -107,13 +85,10 @@ fn the_eroded_island_beside_the_uneroded_one() {
             args.extend(["--erode", "2"]);
         }
         let output = rayterra(&args);
-        let text = stderr(&output);
-        if !output.status.success() && text.contains("no graphics adapter") {
-            assert!(!under_ci(), "CI=true, so this cannot be skipped: {text}");
-            test_skips::skip("rayterra terrain GPU tests", &format!("no Vulkan adapter: {text}"));
+        if no_gpu(&output) {
             return None;
         }
-        assert!(output.status.success(), "{text}");
+        assert!(output.status.success(), "{}", stderr(&output));
         Some(image::open(&out).expect("a screenshot").into_rgb8())
     };
     let Some(plain) = shot(false, "island.png") else { return };
