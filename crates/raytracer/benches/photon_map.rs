@@ -119,7 +119,7 @@ fn query_points(scene: &PreparedScene) -> Vec<(DVec3, DVec3)> {
         for x in 0..w {
             let ray = camera.ray(x as f64 + 0.5, y as f64 + 0.5, (0.0, 0.0));
             if let Some((primitive, hit)) = scene.closest_surface(&ray)
-                && scene.material(primitive).diff > 0.0
+                && scene.course_material(primitive).diff > 0.0
             {
                 let at = scene.interaction(&ray, primitive, hit);
                 points.push((at.point, at.normal));

@@ -1,13 +1,22 @@
-//! Surface materials of the classic shading model (spec section 3, material keys).
+//! Surface materials: the closed set of the scene description (pbrt-v4's tagged union).
+//!
+//! [`Material::Course`] is the course language's weighted material (spec section 3, material
+//! keys), the only one the classic and photon models read. The other variants are Mitsuba 3's
+//! physically based BSDFs with Mitsuba's parameters and defaults (see `docs/mitsuba-format.md`);
+//! the path model evaluates them ([`crate::integrator::bsdfs`]). Colours are linear RGB; every
+//! parameter that takes a texture holds a [`Param`].
 
-use glam::DVec3;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{DAffine2, DVec3};
 
 use crate::scene::texture::TextureRef;
 
-/// The material of a primitive. All weights are plain factors of the classic model; none is
+/// The course language's material. All weights are plain factors of the classic model; none is
 /// normalised against the others (a course file may well have `diff + refl > 1`).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Material {
+pub struct CourseMaterial {
     /// Base colour (`color=`), linear RGB in [0, 1].
     pub color: DVec3,
     /// Texture multiplied into the colour (`texture=`).
@@ -32,10 +41,10 @@ pub struct Material {
     pub absor: DVec3,
 }
 
-impl Default for Material {
+impl Default for CourseMaterial {
     /// The defaults of the scene language: black and inert.
-    fn default() -> Material {
-        Material {
+    fn default() -> CourseMaterial {
+        CourseMaterial {
             color: DVec3::ZERO,
             texture: None,
             bump: None,
@@ -50,10 +59,278 @@ impl Default for Material {
     }
 }
 
-impl Material {
+impl CourseMaterial {
     /// Whether the local (diffuse and highlight) term applies.
     #[inline]
     pub fn has_local(&self) -> bool {
         self.diff > 0.0 || self.spec > 0.0
     }
+}
+
+/// The material of a primitive: the course's, or one of Mitsuba 3's physically based BSDFs.
+///
+/// Conventions of the physically based variants (Mitsuba's): indices of refraction are real
+/// (`int_ior` inside, `ext_ior` outside the surface, the outside being where the shape's normal
+/// points); conductors take a complex index `eta + i k` per RGB channel; roughness is the
+/// microfacet distribution's `alpha` (`alpha_u` along the surface's first tangent, `alpha_v`
+/// along the second). One-sided variants (diffuse, conductors, plastics) are black seen from
+/// behind, as in Mitsuba; wrap them in [`Material::TwoSided`] to change that.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Material {
+    /// The course language's material.
+    Course(CourseMaterial),
+    /// `diffuse`: Lambertian reflection of albedo `reflectance` (default 0.5).
+    Diffuse {
+        /// Albedo, in [0, 1].
+        reflectance: Param,
+    },
+    /// `dielectric`: a smooth interface between two dielectrics (glass, water).
+    Dielectric(Interface),
+    /// `thindielectric`: a thin slab of dielectric (a window pane): reflection and straight
+    /// transmission, with the slab's inner reflections summed.
+    ThinDielectric(Interface),
+    /// `roughdielectric`: a rough interface (Walter et al. 2007).
+    RoughDielectric {
+        /// The indices and tints.
+        interface: Interface,
+        /// The surface's microfacets.
+        microfacet: Microfacet,
+    },
+    /// `conductor`: a smooth metal.
+    Conductor(Metal),
+    /// `roughconductor`: a rough metal.
+    RoughConductor {
+        /// The metal.
+        metal: Metal,
+        /// The surface's microfacets.
+        microfacet: Microfacet,
+    },
+    /// `plastic`: a diffuse base under a smooth dielectric coating (Mitsuba's model with the
+    /// internal scattering of the coating, `nonlinear` as Mitsuba).
+    Plastic(Coating),
+    /// `roughplastic`: a diffuse base under a rough dielectric coating.
+    RoughPlastic {
+        /// The coating and base.
+        coating: Coating,
+        /// The coating's microfacets (isotropic).
+        microfacet: Microfacet,
+    },
+    /// `twosided`: `front` on the side the normal points to, `back` (the same material unless a
+    /// second one is given) on the other, each seen as from its front.
+    TwoSided {
+        /// The material of the front face.
+        front: Box<Material>,
+        /// The material of the back face.
+        back: Box<Material>,
+    },
+    /// `mask`: `material` where `opacity` is 1, clear (light passes unchanged) where it is 0.
+    Mask {
+        /// The opacity, in [0, 1] (default 0.5).
+        opacity: Param,
+        /// The masked material.
+        material: Box<Material>,
+    },
+    /// `blendbsdf`: `(1 - weight) first + weight second`.
+    Blend {
+        /// The weight of `second`, in [0, 1].
+        weight: Param,
+        /// The material at weight 0.
+        first: Box<Material>,
+        /// The material at weight 1.
+        second: Box<Material>,
+    },
+}
+
+impl Material {
+    /// The course material, or `None` for a physically based one.
+    #[inline]
+    pub fn as_course(&self) -> Option<&CourseMaterial> {
+        match self {
+            Material::Course(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// Every parameter of the material and of the materials it wraps, in a fixed order.
+    pub fn params(&self) -> Vec<&Param> {
+        let mut out = Vec::new();
+        self.visit_params(&mut |p| out.push(p));
+        out
+    }
+
+    fn visit_params<'a>(&'a self, f: &mut dyn FnMut(&'a Param)) {
+        match self {
+            Material::Course(_) => {}
+            Material::Diffuse { reflectance } => f(reflectance),
+            Material::Dielectric(i) | Material::ThinDielectric(i) => i.visit_params(f),
+            Material::RoughDielectric { interface, microfacet } => {
+                interface.visit_params(f);
+                microfacet.visit_params(f);
+            }
+            Material::Conductor(m) => f(&m.specular_reflectance),
+            Material::RoughConductor { metal, microfacet } => {
+                f(&metal.specular_reflectance);
+                microfacet.visit_params(f);
+            }
+            Material::Plastic(c) => c.visit_params(f),
+            Material::RoughPlastic { coating, microfacet } => {
+                coating.visit_params(f);
+                microfacet.visit_params(f);
+            }
+            Material::TwoSided { front, back } => {
+                front.visit_params(f);
+                back.visit_params(f);
+            }
+            Material::Mask { opacity, material } => {
+                f(opacity);
+                material.visit_params(f);
+            }
+            Material::Blend { weight, first, second } => {
+                f(weight);
+                first.visit_params(f);
+                second.visit_params(f);
+            }
+        }
+    }
+}
+
+/// A dielectric interface: `dielectric`, `thindielectric`, `roughdielectric`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Interface {
+    /// Index of refraction inside (`int_ior`, default 1.5046, BK7 glass).
+    pub int_ior: f64,
+    /// Index of refraction outside (`ext_ior`, default 1.000277, air).
+    pub ext_ior: f64,
+    /// Tint of reflection (`specular_reflectance`, default 1; not physical, as in Mitsuba).
+    pub specular_reflectance: Param,
+    /// Tint of transmission (`specular_transmittance`, default 1).
+    pub specular_transmittance: Param,
+}
+
+impl Interface {
+    fn visit_params<'a>(&'a self, f: &mut dyn FnMut(&'a Param)) {
+        f(&self.specular_reflectance);
+        f(&self.specular_transmittance);
+    }
+}
+
+/// A metal: `conductor`, `roughconductor`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Metal {
+    /// Real part of the complex index of refraction, per RGB channel, relative to the outside.
+    pub eta: DVec3,
+    /// Imaginary part (the absorption coefficient), per RGB channel, relative to the outside.
+    pub k: DVec3,
+    /// Tint of reflection (`specular_reflectance`, default 1).
+    pub specular_reflectance: Param,
+}
+
+/// A coated diffuse base: `plastic`, `roughplastic`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Coating {
+    /// Albedo of the base (`diffuse_reflectance`, default 0.5).
+    pub diffuse_reflectance: Param,
+    /// Tint of the coating's reflection (`specular_reflectance`, default 1).
+    pub specular_reflectance: Param,
+    /// Index of refraction of the coating (`int_ior`, default 1.49, polypropylene).
+    pub int_ior: f64,
+    /// Index of refraction outside (`ext_ior`, default 1.000277).
+    pub ext_ior: f64,
+    /// Whether the base's colour saturates through inner reflections (`nonlinear`, default
+    /// false).
+    pub nonlinear: bool,
+}
+
+impl Coating {
+    fn visit_params<'a>(&'a self, f: &mut dyn FnMut(&'a Param)) {
+        f(&self.diffuse_reflectance);
+        f(&self.specular_reflectance);
+    }
+}
+
+/// The microfacet distribution of a rough surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Microfacet {
+    /// Beckmann or GGX (`distribution`, default `beckmann`).
+    pub distribution: Distribution,
+    /// Roughness along the first tangent (`alpha_u`, or `alpha` for both; default 0.1).
+    pub alpha_u: Param,
+    /// Roughness along the second tangent (`alpha_v`).
+    pub alpha_v: Param,
+    /// Whether directions are drawn from the visible normals (`sample_visible`, default true).
+    pub sample_visible: bool,
+}
+
+impl Microfacet {
+    fn visit_params<'a>(&'a self, f: &mut dyn FnMut(&'a Param)) {
+        f(&self.alpha_u);
+        f(&self.alpha_v);
+    }
+}
+
+/// A microfacet normal distribution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Distribution {
+    /// Beckmann's Gaussian distribution of slopes.
+    Beckmann,
+    /// GGX (Trowbridge-Reitz), with longer tails.
+    Ggx,
+}
+
+/// A material parameter: a constant, or a texture looked up at the surface's texture
+/// coordinates. Scalar parameters (roughness, opacity, weights) read the first channel of a
+/// constant and the luminance of a texture.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Param {
+    /// The same value everywhere (a scalar is repeated in the three channels).
+    Constant(DVec3),
+    /// A texture.
+    Texture(Arc<TextureSpec>),
+}
+
+impl Param {
+    /// A constant scalar.
+    pub fn scalar(value: f64) -> Param {
+        Param::Constant(DVec3::splat(value))
+    }
+}
+
+/// A texture of the physically based materials (Mitsuba's `bitmap` and `checkerboard`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum TextureSpec {
+    /// `bitmap`: an image file.
+    Bitmap {
+        /// The file, resolved.
+        file: PathBuf,
+        /// Whether the texels are used as stored (`raw`); otherwise 8-bit images are decoded
+        /// from sRGB.
+        raw: bool,
+        /// Nearest-texel lookups (`filter_type="nearest"`) instead of bilinear.
+        nearest: bool,
+        /// What lies beyond [0, 1] (`wrap_mode`).
+        wrap: Wrap,
+        /// Texture coordinates to image coordinates (`to_uv`).
+        to_uv: DAffine2,
+    },
+    /// `checkerboard`: squares of `color0` and `color1`, 2 x 2 over the unit square of texture
+    /// coordinates.
+    Checkerboard {
+        /// Colour of the squares at the origin.
+        color0: DVec3,
+        /// Colour of the others.
+        color1: DVec3,
+        /// Texture coordinates to checker coordinates (`to_uv`).
+        to_uv: DAffine2,
+    },
+}
+
+/// What a bitmap shows beyond the unit square.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    /// Repeats (`repeat`, the default).
+    Repeat,
+    /// Repeats mirrored (`mirror`).
+    Mirror,
+    /// The edge texels (`clamp`).
+    Clamp,
 }

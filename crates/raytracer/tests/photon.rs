@@ -118,7 +118,7 @@ fn caustic_gain(path: &std::path::Path, photons: u64) -> Vec<f64> {
         .scene
         .primitives
         .iter()
-        .filter(|p| p.material.refr > 0.0)
+        .filter(|p| p.material.as_course().is_some_and(|m| m.refr > 0.0))
         .filter_map(|p| match &p.shape {
             raytracer::geometry::Shape::Sphere(s) => Some((s.centre, s.radius)),
             _ => None,
@@ -127,7 +127,7 @@ fn caustic_gain(path: &std::path::Path, photons: u64) -> Vec<f64> {
     assert!(!spheres.is_empty(), "{} has no glass ball", path.display());
     let with_glass = PreparedScene::new(parsed.scene.clone(), &search).expect("prepares");
     let mut clear = parsed.scene;
-    clear.primitives.retain(|p| p.material.refr == 0.0);
+    clear.primitives.retain(|p| p.material.as_course().is_some_and(|m| m.refr == 0.0));
     let without_glass = PreparedScene::new(clear, &search).expect("prepares");
     let estimates = [&with_glass, &without_glass].map(|scene| {
         let mut settings: PhotonSettings = scene.scene.camera.photons.clone();

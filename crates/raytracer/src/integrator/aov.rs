@@ -88,7 +88,7 @@ fn follow(scene: &PreparedScene, lights: &Lights<'_>, mut ray: Ray, rng: &mut Pi
         let at = scene.interaction(&ray, primitive, hit);
         depth += at.t;
         last_normal = at.normal;
-        let bsdf = Bsdf::new(scene.material(primitive), scene.surface_color(&at), &at);
+        let bsdf = Bsdf::new(scene.course_material(primitive), scene.surface_color(&at), &at);
         if bsdf.has(class::SMOOTH) || !bsdf.has(class::SPECULAR) {
             // A surface with a diffuse or glossy lobe, or one that does not scatter at all
             // (black): the albedo is what it reflects smoothly.

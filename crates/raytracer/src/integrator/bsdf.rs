@@ -29,7 +29,7 @@ use std::f64::consts::{FRAC_1_PI, PI};
 use glam::DVec3;
 
 use crate::base::sampling::{cosine_hemisphere_pdf, orthonormal_basis};
-use crate::material::Material;
+use crate::material::CourseMaterial;
 use crate::prepare::Interaction;
 
 /// GGX roughness of the `spec` lobe: `sqrt(2 / (SPEC_POWER + 2))`.
@@ -121,7 +121,7 @@ fn class_of(lobe: usize, rough_mirror: bool) -> u8 {
 
 impl Bsdf {
     /// The lobes of `material` with surface colour `colour` (texture applied) at `at`.
-    pub fn new(material: &Material, colour: DVec3, at: &Interaction) -> Bsdf {
+    pub fn new(material: &CourseMaterial, colour: DVec3, at: &Interaction) -> Bsdf {
         let mut w = [material.diff, material.spec, material.refl, material.refr].map(|w| w.max(0.0));
         let sum: f64 = w.iter().sum();
         if sum > 1.0 {
@@ -480,8 +480,17 @@ mod tests {
         at
     }
 
-    fn material(diff: f64, spec: f64, refl: f64, drefl: f64, refr: f64) -> Material {
-        Material { diff, spec, refl, drefl, refr, rindex: 1.5, color: DVec3::ONE, ..Material::default() }
+    fn material(diff: f64, spec: f64, refl: f64, drefl: f64, refr: f64) -> CourseMaterial {
+        CourseMaterial {
+            diff,
+            spec,
+            refl,
+            drefl,
+            refr,
+            rindex: 1.5,
+            color: DVec3::ONE,
+            ..CourseMaterial::default()
+        }
     }
 
     #[test]

@@ -127,7 +127,7 @@ impl<'s> Classic<'s> {
             Hit::Surface { primitive, hit } => (primitive, hit),
         };
         mix_tag(&mut tag, primitive as u64);
-        let material = self.scene.material(primitive);
+        let material = self.scene.course_material(primitive);
         let surface = self.scene.interaction(ray, primitive, hit);
         let (normal, front) = (surface.normal, surface.front);
 

@@ -95,7 +95,7 @@ pub fn walk(
             Hit::Surface { primitive, hit } => (primitive, hit),
         };
         let at = scene.interaction(&ray, primitive, hit);
-        let material = scene.material(primitive);
+        let material = scene.course_material(primitive);
         if !at.front && material.refr > 0.0 {
             // The segment ran inside the transparent object: Beer's law.
             beta *= (-material.absor * at.t).exp();

@@ -40,7 +40,7 @@ pub use crate::integrator::photon_map::{MIN_PHOTONS, PhotonEstimate};
 pub use crate::integrator::report::PhotonStats;
 use crate::integrator::report::{Progress, RenderStats, Stage};
 use crate::light::Light;
-use crate::material::Material;
+use crate::material::CourseMaterial;
 use crate::prepare::PreparedScene;
 use crate::scene::{Diagnostic, PhotonSettings, Severity};
 
@@ -153,7 +153,7 @@ pub enum Scatter {
 /// The roulette of spec section 10 for one uniform `xi` in [0, 1): `colour` is the surface colour
 /// (texture included), `transmittance` the Beer factor `T` of the path inside when the photon
 /// leaves the object (`None` when it enters or the surface is not transparent).
-pub fn roulette(material: &Material, colour: DVec3, transmittance: Option<DVec3>, xi: f64) -> Scatter {
+pub fn roulette(material: &CourseMaterial, colour: DVec3, transmittance: Option<DVec3>, xi: f64) -> Scatter {
     let p = power(colour);
     let diffuse = ((material.diff + material.spec) * p).max(0.0);
     let mirror = (material.refl * p).max(0.0);
@@ -297,7 +297,7 @@ impl Tracer<'_> {
             rays += 1;
             let Some((primitive, hit)) = scene.closest_surface(&ray) else { break };
             let at = scene.interaction(&ray, primitive, hit);
-            let material = scene.material(primitive);
+            let material = scene.course_material(primitive);
             if material.diff > 0.0 {
                 out.push(Photon {
                     position: at.point.as_vec3(),
@@ -410,14 +410,14 @@ mod tests {
 
     #[test]
     fn roulette_keeps_diff_times_power_of_the_photons() {
-        let m = Material { diff: 0.5, color: DVec3::ONE, ..Material::default() };
+        let m = CourseMaterial { diff: 0.5, color: DVec3::ONE, ..CourseMaterial::default() };
         let n = 100_000;
         let kept = (0..n)
             .filter(|&i| roulette(&m, DVec3::ONE, None, (i as f64 + 0.5) / n as f64) != Scatter::Absorb)
             .count();
         assert_eq!(kept, n / 2);
         // Mirror and refraction take the next shares; leaving glass also weighs by Power(T).
-        let m = Material { diff: 0.2, refl: 0.3, refr: 0.4, rindex: 1.5, ..Material::default() };
+        let m = CourseMaterial { diff: 0.2, refl: 0.3, refr: 0.4, rindex: 1.5, ..CourseMaterial::default() };
         let c = DVec3::new(1.0, 0.5, 0.0); // Power 0.5
         assert_eq!(roulette(&m, c, None, 0.09), Scatter::Diffuse);
         assert_eq!(roulette(&m, c, None, 0.11), Scatter::Mirror);

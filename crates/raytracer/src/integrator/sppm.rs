@@ -463,7 +463,7 @@ fn trace_photon(
         rays += 1;
         let crate::prepare::Hit::Surface { primitive, hit } = scene.closest_hit(&ray) else { break };
         let at = scene.interaction(&ray, primitive, hit);
-        let material = scene.material(primitive);
+        let material = scene.course_material(primitive);
         if !at.front && material.refr > 0.0 {
             beta *= (-material.absor * at.t).exp();
         }

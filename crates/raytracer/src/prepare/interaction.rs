@@ -109,11 +109,12 @@ impl PreparedScene {
     #[inline]
     pub fn surface_color(&self, at: &Interaction) -> DVec3 {
         let p = &self.scene.primitives[at.primitive as usize];
+        let color = p.material.as_course().map_or(DVec3::ZERO, |m| m.color);
         match self.texture_of[at.primitive as usize][0] {
-            NO_TEXTURE => p.material.color,
+            NO_TEXTURE => color,
             t => {
                 let (u, v) = p.shape.texture_coordinates(at.point, at.part);
-                p.material.color * self.textures[t as usize].sample(u, v)
+                color * self.textures[t as usize].sample(u, v)
             }
         }
     }

@@ -12,7 +12,7 @@ use crate::base::diagnostic::{clip, clip_path};
 use crate::base::memory::MemoryBudget;
 use crate::geometry::obj::{LoadedObj, ObjError, load_obj};
 use crate::geometry::{MeshFile, Shape, TriangleMesh};
-use crate::material::Material;
+use crate::material::{CourseMaterial, Material};
 use crate::procedural;
 use crate::scene::{Diagnostic, Location, Primitive, Scene, Severity};
 use crate::texture::{ImageInfo, Texture, TextureError, TextureRef, TextureSource, memory_bytes};
@@ -97,7 +97,12 @@ pub(super) fn load_meshes(
                     .par_iter()
                     .map(|(colour, tris)| {
                         let material = match colour {
-                            Some(c) => Arc::new(Material { color: *c, ..(*block_material).clone() }),
+                            Some(c) => match &*block_material {
+                                Material::Course(m) => {
+                                    Arc::new(Material::Course(CourseMaterial { color: *c, ..m.clone() }))
+                                }
+                                _ => block_material.clone(),
+                            },
                             None => block_material.clone(),
                         };
                         Primitive {

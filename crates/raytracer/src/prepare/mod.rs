@@ -121,7 +121,9 @@ impl PreparedScene {
         let mut texture_of = Vec::with_capacity(scene.primitives.len());
         for p in &scene.primitives {
             let mut pair = [NO_TEXTURE; 2];
-            for (slot, t) in pair.iter_mut().zip([&p.material.texture, &p.material.bump]) {
+            let course = p.material.as_course();
+            let refs = [course.and_then(|m| m.texture.as_ref()), course.and_then(|m| m.bump.as_ref())];
+            for (slot, t) in pair.iter_mut().zip(refs) {
                 if let Some(t) = t {
                     *slot = *index_of.entry(&t.source).or_insert_with(|| {
                         sources.push(t);

@@ -4,7 +4,7 @@
 use super::{Hit, PreparedScene};
 use crate::accel::BoxRay;
 use crate::geometry::{Cylinder, Plane, Ray, Shape, ShapeHit, Sphere, Square};
-use crate::material::Material;
+use crate::material::{CourseMaterial, Material};
 use crate::scene::Scene;
 
 impl PreparedScene {
@@ -75,6 +75,21 @@ impl PreparedScene {
     #[inline]
     pub fn material(&self, primitive: u32) -> &Material {
         &self.scene.primitives[primitive as usize].material
+    }
+
+    /// The course material of primitive `i`, for the models that read only the course's
+    /// materials (classic, photon, SPPM): a physically based material reads as the inert
+    /// default there, and the render refuses such scenes in those models before it starts
+    /// ([`PreparedScene::has_physical_materials`]).
+    #[inline]
+    pub fn course_material(&self, primitive: u32) -> &CourseMaterial {
+        static INERT: std::sync::OnceLock<CourseMaterial> = std::sync::OnceLock::new();
+        self.material(primitive).as_course().unwrap_or_else(|| INERT.get_or_init(CourseMaterial::default))
+    }
+
+    /// Whether any primitive has a physically based material (which only the path model reads).
+    pub fn has_physical_materials(&self) -> bool {
+        self.scene.primitives.iter().any(|p| p.material.as_course().is_none())
     }
 }
 

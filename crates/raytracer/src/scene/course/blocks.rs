@@ -10,7 +10,7 @@ use super::lexer::{Token, char_count, tokenize};
 use super::{MAX_KEPT_DIAGNOSTICS, Omitted, parser_has_errors};
 use crate::base::diagnostic::{Diagnostic, Severity, clip};
 use crate::base::source::{SourceFile, Span, numbered_lines};
-use crate::material::Material;
+use crate::material::{CourseMaterial, Material};
 
 /// The kinds of block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -260,9 +260,9 @@ impl<'s> Parser<'s> {
     /// The shared copy of an untextured material equal to `m` (a scene of a million spheres in a
     /// handful of materials keeps a handful per piece, see [`parse_in_pieces`]); textured
     /// materials stay their own (their texture reference names the line that set it).
-    pub(super) fn share(&mut self, m: Material) -> Arc<Material> {
+    pub(super) fn share(&mut self, m: CourseMaterial) -> Arc<Material> {
         if m.texture.is_some() || m.bump.is_some() {
-            return Arc::new(m);
+            return Arc::new(Material::Course(m));
         }
         let key = [
             m.color.x, m.color.y, m.color.z, m.diff, m.spec, m.refl, m.drefl, m.refr, m.rindex, m.absor.x,
@@ -272,7 +272,7 @@ impl<'s> Parser<'s> {
         if let Some(shared) = self.materials.get(&key) {
             return shared.clone();
         }
-        let shared = Arc::new(m);
+        let shared = Arc::new(Material::Course(m));
         self.materials.insert(key, shared.clone());
         shared
     }

@@ -16,7 +16,7 @@ use crate::base::diagnostic::{Severity, clip};
 use crate::base::source::Span;
 use crate::geometry::{Bezier, Cylinder, MeshFile, MeshTransform, Plane, Shape, Sphere, Square, Triangle};
 use crate::light::Light;
-use crate::material::Material;
+use crate::material::CourseMaterial;
 use crate::scene::texture::{BUILTIN_PREFIX, Builtin, TextureRef, TextureSource};
 
 impl<'s> Parser<'s> {
@@ -223,8 +223,8 @@ impl<'p, 's> BlockReader<'p, 's> {
         }
     }
 
-    pub(super) fn material(&mut self) -> Material {
-        let mut m = Material::default();
+    pub(super) fn material(&mut self) -> CourseMaterial {
+        let mut m = CourseMaterial::default();
         if let Ok(Some(c)) = self.color("color", false) {
             m.color = c;
         }

@@ -149,10 +149,13 @@ fn lights_of_every_type() {
 #[test]
 fn material_keys_and_defaults() {
     let p = ok(SPHERE);
-    assert_eq!(*p.scene.primitives[0].material, crate::material::Material::default());
+    assert_eq!(
+        *p.scene.primitives[0].material,
+        crate::material::Material::Course(crate::material::CourseMaterial::default())
+    );
     let text = "primitive sphere\n O= 0 0 0\n R= 1\n color= 0.5 0.6 0.7\n texture= marble.bmp\n diff= 0.1\n \
                 spec= 0.2\n refl= 0.3\n drefl= 0.4\n blur= exp\n refr= 0.5\n rindex= 1.5\n absor= 1 2 3\nend\n";
-    let m = &ok(text).scene.primitives[0].material;
+    let m = ok(text).scene.primitives[0].material.as_course().cloned().expect("a course material");
     assert_eq!(m.color, DVec3::new(0.5, 0.6, 0.7));
     assert_eq!((m.diff, m.spec, m.refl, m.drefl, m.refr, m.rindex), (0.1, 0.2, 0.3, 0.4, 0.5, 1.5));
     assert_eq!(m.absor, DVec3::new(1.0, 2.0, 3.0));
@@ -164,13 +167,13 @@ fn material_keys_and_defaults() {
 #[test]
 fn texture_paths_keep_spaces_and_builtins_parse() {
     let text = "primitive sphere\n O= 0 0 0\n R= 1\n texture= my  textures/a b.png\nend\n";
-    let m = &ok(text).scene.primitives[0].material;
+    let m = ok(text).scene.primitives[0].material.as_course().cloned().expect("a course material");
     assert_eq!(
         m.texture.as_ref().expect("texture").source,
         TextureSource::File("my  textures/a b.png".into())
     );
     let text = "primitive sphere\n O= 0 0 0\n R= 1\n texture= builtin:checker:4\nend\n";
-    let m = &ok(text).scene.primitives[0].material;
+    let m = ok(text).scene.primitives[0].material.as_course().cloned().expect("a course material");
     assert_eq!(m.texture.as_ref().expect("texture").source, TextureSource::Builtin(Builtin::Checker(4)));
 }
 
@@ -753,7 +756,7 @@ fn triangles_in_both_forms_and_obj_as_a_block_name() {
         Shape::Triangle(t) => assert_eq!(t.corners[2], DVec3::new(1.0, 0.0, 1.0)),
         other => panic!("{other:?}"),
     }
-    assert_eq!(prims[0].material.color, DVec3::X);
+    assert_eq!(prims[0].material.as_course().map(|m| m.color), Some(DVec3::X));
     let (line, _, message) = single_error("primitive triangle\n P0= 0 0 0\n P1= 1 0 0\nend\n");
     assert_eq!((line, message.as_str()), (1, "`primitive triangle` needs `P2=` (its corners)"));
     let (line, _, message) = single_error("primitive triangle\n P0= 0 0 0\n P1= 1 0 0\n P2= 2 0 0\nend\n");
@@ -836,11 +839,11 @@ fn normal_maps_under_both_names() {
                 primitive sphere\n O= 0 0 0\n R= 1\n NT= builtin:stripes:4\nend\n";
     let prims = ok(text).scene.primitives;
     assert_eq!(
-        prims[0].material.bump.as_ref().map(|t| t.source.clone()),
+        prims[0].material.as_course().and_then(|m| m.bump.as_ref()).as_ref().map(|t| t.source.clone()),
         Some(TextureSource::File("waves.png".into()))
     );
     assert_eq!(
-        prims[1].material.bump.as_ref().map(|t| t.source.clone()),
+        prims[1].material.as_course().and_then(|m| m.bump.as_ref()).as_ref().map(|t| t.source.clone()),
         Some(TextureSource::Builtin(Builtin::Stripes(4)))
     );
 }
@@ -983,12 +986,12 @@ fn nomal_ball_and_nomal_plane_are_normal_mapped_sphere_and_plane() {
         other => panic!("expected a sphere, got {other:?}"),
     }
     assert_eq!(
-        prims[0].material.bump.as_ref().map(|t| t.source.clone()),
+        prims[0].material.as_course().and_then(|m| m.bump.as_ref()).as_ref().map(|t| t.source.clone()),
         Some(TextureSource::Builtin(Builtin::Stripes(4)))
     );
     assert!(matches!(prims[1].shape, Shape::Plane(_)), "{:?}", prims[1].shape);
     assert_eq!(
-        prims[1].material.bump.as_ref().map(|t| t.source.clone()),
+        prims[1].material.as_course().and_then(|m| m.bump.as_ref()).as_ref().map(|t| t.source.clone()),
         Some(TextureSource::File("waves.bmp".into()))
     );
     // One note at each type name, saying what it is read as.
