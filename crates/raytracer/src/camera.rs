@@ -37,7 +37,7 @@ impl Camera {
     /// settings have a lens but no `focal_dist=`.
     pub fn new(settings: &CameraSettings, width: u32, height: u32, focal_distance: f64) -> Camera {
         let forward = settings.dir;
-        let right = forward.cross(DVec3::Z).try_normalize().unwrap_or(DVec3::X);
+        let right = forward.cross(settings.up.unwrap_or(DVec3::Z)).try_normalize().unwrap_or(DVec3::X);
         let up = right.cross(forward);
         Camera {
             eye: settings.eye,

@@ -20,7 +20,7 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::geometry::{MeshFile, Shape};
-use crate::light::Light;
+use crate::light::{Emitter, Light};
 use crate::material::Material;
 
 /// A whole scene as described by a scene file.
@@ -38,6 +38,65 @@ pub struct Scene {
     /// The mesh files the scene names (`primitive mesh`, `primitive polyhedron`), in file order,
     /// not yet read: [`crate::PreparedScene`] reads each and puts its primitives in its place.
     pub meshes: Vec<MeshPrimitive>,
+    /// The physically based emitters (Mitsuba's `<emitter>`s), which only the path model reads;
+    /// course files have none (their lights are [`Scene::lights`]).
+    pub emitters: Vec<Emitter>,
+    /// What the scene file says about rendering it (Mitsuba's integrator, sampler and film);
+    /// the defaults for course files.
+    pub render: SceneRender,
+}
+
+/// The render settings a scene file states (Mitsuba's `<integrator>`, `<sampler>` and
+/// `<rfilter>`). Command-line options win over them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneRender {
+    /// Samples a pixel (the sampler's `sample_count`), if the file says.
+    pub samples: Option<u32>,
+    /// Longest path in segments (the integrator's `max_depth`; `-1`, unbounded, is `u32::MAX`),
+    /// if the file says.
+    pub max_depth: Option<u32>,
+    /// The path depth from which Russian roulette may end a path (`rr_depth`, default 5).
+    pub rr_depth: u32,
+    /// Whether emitters seen directly from the camera are left out (`hide_emitters`).
+    pub hide_emitters: bool,
+    /// How samples spread over pixels (the film's `rfilter`).
+    pub filter: PixelFilter,
+    /// Whether 8-bit output is sRGB-encoded by default (Mitsuba's convention); course files
+    /// write their values as they are unless `--gamma` is given.
+    pub srgb_output: bool,
+}
+
+impl Default for SceneRender {
+    fn default() -> SceneRender {
+        SceneRender {
+            samples: None,
+            max_depth: None,
+            rr_depth: 5,
+            hide_emitters: false,
+            filter: PixelFilter::Box,
+            srgb_output: false,
+        }
+    }
+}
+
+/// The reconstruction filter of the path model: the weight a sample at an offset from a pixel's
+/// centre (in pixels) has in that pixel. Samples are drawn with the filter's own density
+/// (filter importance sampling), so every sample has weight 1 and pixels stay independent.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PixelFilter {
+    /// Uniform over the pixel (`box`, radius 0.5): the course's sampling.
+    Box,
+    /// `tent`: `1 - |x| / radius` per axis (default radius 1).
+    Tent {
+        /// Radius in pixels.
+        radius: f64,
+    },
+    /// `gaussian`: `exp(-x^2 / (2 stddev^2)) - exp(-radius^2 / (2 stddev^2))` per axis, radius
+    /// `4 stddev` (Mitsuba's definition; default `stddev` 0.5).
+    Gaussian {
+        /// Standard deviation in pixels.
+        stddev: f64,
+    },
 }
 
 /// The `background` block.
@@ -107,6 +166,9 @@ pub struct CameraSettings {
     pub photons: PhotonSettings,
     /// The light-transport model the file asks for (`algorithm=`), and where.
     pub algorithm: Option<(Algorithm, Location)>,
+    /// The image's up direction (unit, at right angles to `dir`), when the file gives one
+    /// (Mitsuba's `lookat`); course files take the world's `+z` ([`crate::camera`]).
+    pub up: Option<DVec3>,
 }
 
 /// The light-transport model named by the camera key `algorithm=` (students' renderers of the
@@ -165,6 +227,7 @@ impl Default for CameraSettings {
             focal_distance: None,
             photons: PhotonSettings::default(),
             algorithm: None,
+            up: None,
         }
     }
 }

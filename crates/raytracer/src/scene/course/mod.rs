@@ -22,7 +22,7 @@ mod pieces;
 
 use std::fmt;
 
-use super::{Background, CameraSettings, Scene};
+use super::{Background, CameraSettings, Scene, SceneRender};
 use crate::base::diagnostic::Diagnostic;
 use crate::base::source::SourceFile;
 use blocks::Parser;
@@ -135,6 +135,8 @@ impl Scene {
             lights: Vec::new(),
             primitives: Vec::new(),
             meshes: Vec::new(),
+            emitters: Vec::new(),
+            render: SceneRender::default(),
         }
     }
 }

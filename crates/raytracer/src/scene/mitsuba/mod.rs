@@ -38,6 +38,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod build;
 mod cie;
 mod error;
 mod numbers;
@@ -54,6 +55,7 @@ mod tests;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+pub use build::{Built, build};
 pub use cie::{
     CIE_D65_NORMALIZATION, CIE_MAX, CIE_MIN, CIE_TABLE, CIE_Y_NORMALIZATION, cie_d65, cie1931_xyz,
     xyz_to_srgb,

@@ -1,0 +1,235 @@
+//! From a Mitsuba plugin tree ([`Document`]) to the scene description every model reads
+//! ([`Scene`]): the sensor becomes the camera and the render settings, shapes become primitives
+//! (meshes read here, in world space), BSDFs become [`Material`]s, emitters become
+//! [`Emitter`]s. Plugins rayterra does not have are warnings naming the plugin and its line, and
+//! the render goes on without them; where going on would show something else than Mitsuba
+//! would (a sensor type we lack), they are errors.
+//!
+//! World space is the file's own: Mitsuba scenes are often y-up, and the camera's `up` comes from
+//! its `to_world`, so nothing is rotated.
+
+mod bsdfs;
+mod emitters;
+mod ior;
+mod props;
+mod sensor;
+mod shapes;
+mod textures;
+
+#[cfg(test)]
+mod tests;
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use super::{Document, Plugin, PluginKind};
+use crate::light::Emitter;
+use crate::material::{Material, Param, TextureSpec};
+use crate::scene::{Background, CameraSettings, Diagnostic, Scene, SceneRender, Severity};
+pub use ior::{METALS, NAMED_IORS, metal_ior, named_ior};
+use props::Props;
+
+/// A Mitsuba scene built: the scene, the warnings and notes found on the way, and the files it
+/// read (mesh files; textures are read when the scene is prepared).
+#[derive(Debug)]
+pub struct Built {
+    /// The scene.
+    pub scene: Scene,
+    /// Warnings and notes, in file order.
+    pub diagnostics: Vec<Diagnostic>,
+    /// The mesh files read.
+    pub inputs: Vec<PathBuf>,
+}
+
+/// Builds the scene of a Mitsuba document. Every error found is returned (with the warnings
+/// before it); a scene is built only when there is none.
+pub fn build(doc: &Document) -> Result<Built, Vec<Diagnostic>> {
+    let mut b = Builder {
+        doc,
+        scene: Scene {
+            background: Background::default(),
+            camera: CameraSettings::default(),
+            lights: Vec::new(),
+            primitives: Vec::new(),
+            meshes: Vec::new(),
+            emitters: Vec::new(),
+            render: SceneRender { srgb_output: true, ..SceneRender::default() },
+        },
+        diagnostics: Vec::new(),
+        inputs: Vec::new(),
+        materials: HashMap::new(),
+        textures: HashMap::new(),
+        sensor_seen: false,
+    };
+    b.diagnostics.extend(doc.warnings.iter().cloned());
+    let root = &doc.root;
+    let root_props = Props::new(doc, root);
+    for (child, plugin) in doc.children(root) {
+        let _ = child;
+        let result = match plugin.kind {
+            PluginKind::Integrator => b.integrator(plugin),
+            PluginKind::Sensor => b.sensor(plugin),
+            PluginKind::Shape => b.shape(plugin, None),
+            // An area emitter declared by id is built in the shape that refers to it.
+            PluginKind::Emitter if plugin.type_name == "area" && plugin.id.is_some() => Ok(()),
+            PluginKind::Emitter => b.emitter(plugin),
+            // Declared for reference by id; built where they are used.
+            PluginKind::Bsdf
+            | PluginKind::Texture
+            | PluginKind::Film
+            | PluginKind::Sampler
+            | PluginKind::ReconstructionFilter => Ok(()),
+            PluginKind::Medium | PluginKind::Phase | PluginKind::Volume if plugin.id.is_some() => Ok(()),
+            _ => {
+                b.warn(
+                    &Props::new(doc, plugin),
+                    "rayterra has no such plugin; the scene is rendered without it",
+                );
+                Ok(())
+            }
+        };
+        if let Err(e) = result {
+            b.diagnostics.push(e);
+        }
+    }
+    b.diagnostics.extend(root_props.unread());
+    if !b.sensor_seen {
+        b.diagnostics.push(root_props.error(
+            "the scene has no <sensor>: add a `perspective` sensor with a `to_world` transform, a film and a sampler",
+        ));
+    }
+    if b.diagnostics.iter().any(Diagnostic::is_error) {
+        return Err(b.diagnostics);
+    }
+    Ok(Built { scene: b.scene, diagnostics: b.diagnostics, inputs: b.inputs })
+}
+
+/// The state of a build.
+struct Builder<'a> {
+    doc: &'a Document,
+    scene: Scene,
+    diagnostics: Vec<Diagnostic>,
+    inputs: Vec<PathBuf>,
+    /// Materials built, by plugin (a BSDF referenced by several shapes is built once).
+    materials: HashMap<*const Plugin, Arc<Material>>,
+    /// Textures built, by plugin.
+    textures: HashMap<*const Plugin, Arc<TextureSpec>>,
+    /// Whether a sensor was read (the first one is used).
+    sensor_seen: bool,
+}
+
+impl<'a> Builder<'a> {
+    /// A warning about a plugin rayterra does not render, naming it.
+    fn warn(&mut self, props: &Props<'_>, consequence: &str) {
+        let p = props.plugin;
+        let message = format!("the {} `{}` is not supported: {consequence}", p.kind.tag(), p.type_name);
+        self.diagnostics.push(props.warning(message));
+    }
+
+    /// A note (the render goes on as Mitsuba's would, in expectation).
+    fn note(&mut self, props: &Props<'_>, message: impl Into<String>) {
+        let mut d = props.warning(message);
+        d.severity = Severity::Note;
+        self.diagnostics.push(d);
+    }
+
+    /// Reports the properties of `props` nobody read.
+    fn finish(&mut self, props: &Props<'_>) {
+        self.diagnostics.extend(props.unread());
+    }
+
+    /// A colour or texture parameter: `<rgb name>`/`<spectrum name>`/`<float name>`, or a
+    /// nested or referenced `<texture name>`; `default` (grey) when absent.
+    fn param(&mut self, props: &Props<'a>, name: &str, default: f64) -> Result<Param, Diagnostic> {
+        if let Some(c) = props.color(name)? {
+            return Ok(Param::Constant(c));
+        }
+        match props.named_child(name) {
+            None => Ok(Param::scalar(default)),
+            Some(t) if t.kind == PluginKind::Texture => self.texture(t),
+            Some(other) => Err(props.error_at(
+                other.pos,
+                format!("`{name}` must be a colour or a <texture>, not a <{}>", other.kind.tag()),
+            )),
+        }
+    }
+
+    /// `<integrator>`: the path tracer's settings.
+    fn integrator(&mut self, plugin: &'a Plugin) -> Result<(), Diagnostic> {
+        let props = Props::new(self.doc, plugin);
+        match props.type_name() {
+            "path" => self.path_settings(&props)?,
+            "direct" => {
+                // One bounce: the path tracer at depth 2 has the same expectation.
+                props.ignore("emitter_samples");
+                props.ignore("bsdf_samples");
+                self.scene.render.max_depth = Some(2);
+                self.scene.render.hide_emitters = props.boolean("hide_emitters", false)?;
+                self.note(
+                    &props,
+                    "the `direct` integrator is rendered as the path tracer with max_depth 2 (the same \
+                     picture in expectation; `emitter_samples` and `bsdf_samples` change only its noise)",
+                );
+            }
+            "aov" | "moment" => {
+                let nested = props.children(PluginKind::Integrator);
+                self.note(
+                    &props,
+                    format!("the `{}` integrator's nested integrator is rendered", props.type_name()),
+                );
+                props.ignore("aovs");
+                match nested.first() {
+                    Some((_, inner)) => return self.integrator(inner),
+                    None => self.scene.render = SceneRender { srgb_output: true, ..SceneRender::default() },
+                }
+            }
+            "volpath" | "volpathmis" | "prb" | "prbvolpath" | "ptracer" => {
+                self.path_settings(&props)?;
+                let name = props.type_name().to_owned();
+                self.warn(
+                    &props,
+                    &format!("the scene is rendered with the `path` integrator instead of `{name}`"),
+                );
+            }
+            _ => {
+                self.warn(&props, "the scene is rendered with the `path` integrator");
+            }
+        }
+        self.finish(&props);
+        Ok(())
+    }
+
+    /// `max_depth`, `rr_depth` and `hide_emitters` of a path integrator.
+    fn path_settings(&mut self, props: &Props<'_>) -> Result<(), Diagnostic> {
+        let depth = props.integer("max_depth", -1)?;
+        self.scene.render.max_depth = Some(match depth {
+            -1 => u32::MAX,
+            d if d >= 0 => d.min(u32::MAX as i64 - 1) as u32,
+            d => {
+                return Err(props.error(format!("`max_depth` must be -1 (unbounded) or at least 0, not {d}")));
+            }
+        });
+        let rr = props.integer("rr_depth", 5)?;
+        if rr < 1 {
+            return Err(props.error(format!("`rr_depth` must be at least 1, not {rr}")));
+        }
+        self.scene.render.rr_depth = rr.min(u32::MAX as i64) as u32;
+        self.scene.render.hide_emitters = props.boolean("hide_emitters", false)?;
+        Ok(())
+    }
+
+    /// The material of a shape: its nested or referenced BSDF, or Mitsuba's default (diffuse,
+    /// reflectance 0.5).
+    fn shape_material(&mut self, props: &Props<'a>) -> Result<Arc<Material>, Diagnostic> {
+        match props.children(PluginKind::Bsdf).first() {
+            Some((_, bsdf)) => self.material(bsdf),
+            None => Ok(Arc::new(Material::Diffuse { reflectance: Param::scalar(0.5) })),
+        }
+    }
+
+    /// Adds an emitter.
+    fn push_emitter(&mut self, e: Emitter) {
+        self.scene.emitters.push(e);
+    }
+}

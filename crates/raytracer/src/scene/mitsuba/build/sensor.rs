@@ -1,0 +1,199 @@
+//! `<sensor>` (with its `<film>`, `<rfilter>` and `<sampler>`) to the camera and the render
+//! settings.
+//!
+//! Mitsuba's camera looks along its local `+z` with `+y` up; its `to_world` places it. The image
+//! plane at distance 1 spans `2 tan(fov / 2)` along the `fov_axis`, the other side following the
+//! film's aspect ratio.
+
+use glam::{DVec3, DVec4};
+
+use super::super::{Plugin, PluginKind};
+use super::{Builder, Props};
+use crate::scene::{Diagnostic, PixelFilter, check_image_size};
+
+/// Mitsuba's default film size.
+const DEFAULT_FILM: (i64, i64) = (768, 576);
+/// Mitsuba's default samples a pixel (`independent` sampler).
+const DEFAULT_SAMPLES: i64 = 4;
+
+impl<'a> Builder<'a> {
+    /// The first `<sensor>` is the camera; later ones are left out with a warning.
+    pub(super) fn sensor(&mut self, plugin: &'a Plugin) -> Result<(), Diagnostic> {
+        let props = Props::new(self.doc, plugin);
+        if self.sensor_seen {
+            self.diagnostics.push(props.warning("only the first <sensor> is rendered; this one is left out"));
+            return Ok(());
+        }
+        self.sensor_seen = true;
+        let thin_lens = match props.type_name() {
+            "perspective" => false,
+            "thinlens" => true,
+            other => {
+                return Err(props.error(format!(
+                    "the sensor `{other}` is not supported: rayterra renders `perspective` and `thinlens` sensors"
+                )));
+            }
+        };
+        // The film first: the field of view depends on its aspect ratio.
+        let (width, height) = match props.children(PluginKind::Film).first() {
+            Some((_, film)) => self.film(film)?,
+            None => (DEFAULT_FILM.0 as u32, DEFAULT_FILM.1 as u32),
+        };
+        let samples = match props.children(PluginKind::Sampler).first() {
+            Some((_, sampler)) => {
+                let s = Props::new(self.doc, sampler);
+                let n = s.integer("sample_count", DEFAULT_SAMPLES)?;
+                if !(1..=1 << 24).contains(&n) {
+                    return Err(s.error(format!("`sample_count` must be from 1 to {}, not {n}", 1 << 24)));
+                }
+                for ignored in ["seed", "jitter", "scramble_seed", "strength", "dimension"] {
+                    s.ignore(ignored);
+                }
+                self.finish(&s);
+                n as u32
+            }
+            None => DEFAULT_SAMPLES as u32,
+        };
+        self.scene.render.samples = Some(samples);
+
+        let to_world = props.transform("to_world")?;
+        let eye = to_world.transform_point3(DVec3::ZERO);
+        let forward = (to_world * DVec4::new(0.0, 0.0, 1.0, 0.0)).truncate();
+        let up = (to_world * DVec4::new(0.0, 1.0, 0.0, 0.0)).truncate();
+        let left = (to_world * DVec4::new(1.0, 0.0, 0.0, 0.0)).truncate();
+        let Some(dir) = forward.try_normalize() else {
+            return Err(props.error("the sensor's `to_world` has no viewing direction"));
+        };
+        let Some(up) = (up - dir * up.dot(dir)).try_normalize() else {
+            return Err(
+                props.error("the sensor's `to_world` has no up direction apart from its viewing direction")
+            );
+        };
+        if left.dot(up.cross(dir)) < 0.0 {
+            self.diagnostics.push(
+                props.warning("the sensor's `to_world` mirrors the image; rayterra renders it unmirrored"),
+            );
+        }
+
+        let aspect = width as f64 / height as f64;
+        let axes = ["x", "y", "diagonal", "smaller", "larger"];
+        let (tan_half, axis) = match props.get("fov") {
+            Some(_) => {
+                let fov = props.float("fov", 0.0)?;
+                if !(fov > 0.0 && fov < 180.0) {
+                    return Err(props.error("`fov` must be an angle between 0 and 180 degrees"));
+                }
+                ((fov.to_radians() / 2.0).tan(), props.choice("fov_axis", &axes, "x")?)
+            }
+            None => {
+                // A focal length on 35 mm film (36 x 24 mm), along the diagonal; Mitsuba's default
+                // is 50 mm.
+                let (mm, pos) = props.string("focal_length")?.unwrap_or(("50mm", props.plugin.pos));
+                let f: f64 = mm.trim_end_matches("mm").parse().unwrap_or(f64::NAN);
+                if !(f > 0.0 && f.is_finite()) {
+                    let text = crate::base::diagnostic::clip(mm);
+                    return Err(
+                        props.error_at(pos, format!("`focal_length` must be like `50mm`, not `{text}`"))
+                    );
+                }
+                props.ignore("fov_axis");
+                (36f64.hypot(24.0) / 2.0 / f, "diagonal")
+            }
+        };
+        let axis = match axis {
+            "smaller" if aspect >= 1.0 => "y",
+            "smaller" => "x",
+            "larger" if aspect >= 1.0 => "x",
+            "larger" => "y",
+            a => a,
+        };
+        let (half_w, half_h) = match axis {
+            "x" => (tan_half, tan_half / aspect),
+            "y" => (tan_half * aspect, tan_half),
+            _ => {
+                let d = tan_half / (aspect * aspect + 1.0).sqrt();
+                (d * aspect, d)
+            }
+        };
+        let cam = &mut self.scene.camera;
+        cam.eye = eye;
+        cam.dir = dir;
+        cam.up = Some(up);
+        cam.lens_width = 2.0 * half_w;
+        cam.lens_height = 2.0 * half_h;
+        cam.image_width = width;
+        cam.image_height = height;
+        if thin_lens {
+            cam.aperture = props.float("aperture_radius", 0.0)?.max(0.0);
+            cam.focal_distance = Some(props.positive("focus_distance", 1.0)?);
+        } else {
+            props.ignore("focus_distance");
+        }
+        for ignored in [
+            "near_clip",
+            "far_clip",
+            "shutter_open",
+            "shutter_close",
+            "principal_point_offset_x",
+            "principal_point_offset_y",
+            "srf",
+        ] {
+            props.ignore(ignored);
+        }
+        self.finish(&props);
+        Ok(())
+    }
+
+    /// The film's size, and its reconstruction filter into the render settings.
+    fn film(&mut self, plugin: &'a Plugin) -> Result<(u32, u32), Diagnostic> {
+        let props = Props::new(self.doc, plugin);
+        if !matches!(props.type_name(), "hdrfilm" | "specfilm") {
+            self.warn(&props, "it is read as an `hdrfilm`");
+        }
+        let w = props.integer("width", DEFAULT_FILM.0)?;
+        let h = props.integer("height", DEFAULT_FILM.1)?;
+        let (w, h) = match (u32::try_from(w), u32::try_from(h)) {
+            (Ok(w), Ok(h)) => (w, h),
+            _ => return Err(props.error(format!("the film size {w}x{h} is not a size"))),
+        };
+        check_image_size(w, h).map_err(|m| props.error(m))?;
+        if props.plugin.property("crop_width").is_some() || props.plugin.property("crop_offset_x").is_some() {
+            self.diagnostics
+                .push(props.warning("the film's crop window is not supported: the whole film is rendered"));
+            for c in ["crop_width", "crop_height", "crop_offset_x", "crop_offset_y"] {
+                props.ignore(c);
+            }
+        }
+        for ignored in [
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "sample_border",
+            "compensate",
+            "banner",
+            "rfilter",
+        ] {
+            props.ignore(ignored);
+        }
+        self.scene.render.filter = match props.children(PluginKind::ReconstructionFilter).first() {
+            None => PixelFilter::Gaussian { stddev: 0.5 },
+            Some((_, f)) => {
+                let f = Props::new(self.doc, f);
+                let filter = match f.type_name() {
+                    "box" => PixelFilter::Box,
+                    "tent" => PixelFilter::Tent { radius: f.positive("radius", 1.0)? },
+                    "gaussian" => PixelFilter::Gaussian { stddev: f.positive("stddev", 0.5)? },
+                    _ => {
+                        self.warn(&f, "pixels are reconstructed with Mitsuba's default `gaussian` filter");
+                        super::bsdfs::mark_all_read(&f);
+                        PixelFilter::Gaussian { stddev: 0.5 }
+                    }
+                };
+                self.finish(&f);
+                filter
+            }
+        };
+        self.finish(&props);
+        Ok((w, h))
+    }
+}

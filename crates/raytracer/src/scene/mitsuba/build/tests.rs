@@ -1,0 +1,142 @@
+//! Tests of the scene builder on small scenes written here.
+
+use glam::DVec3;
+
+use super::build;
+use crate::light::Emitter;
+use crate::material::{Material, Param};
+use crate::scene::mitsuba::read_source;
+use crate::scene::{PixelFilter, Severity, SourceFile};
+
+fn built(text: &str) -> super::Built {
+    let doc = read_source(SourceFile::from_text("t.xml", None, text.to_owned()), &[]).expect("reads");
+    match build(&doc) {
+        Ok(b) => b,
+        Err(e) => panic!("{e:#?}"),
+    }
+}
+
+fn errors(text: &str) -> Vec<String> {
+    let doc = read_source(SourceFile::from_text("t.xml", None, text.to_owned()), &[]).expect("reads");
+    build(&doc).expect_err("fails").into_iter().filter(|d| d.is_error()).map(|d| d.message).collect()
+}
+
+const SENSOR: &str = r#"<sensor type="perspective">
+    <float name="fov" value="90"/>
+    <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="32"/>
+        <rfilter type="tent"/></film>
+</sensor>"#;
+
+#[test]
+fn a_sensor_becomes_the_camera_and_the_render_settings() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="7"/></integrator>{SENSOR}</scene>"#
+    ));
+    let cam = &b.scene.camera;
+    assert_eq!((cam.image_width, cam.image_height), (64, 32));
+    assert!((cam.dir - -DVec3::Z).length() < 1e-12);
+    assert_eq!(cam.up, Some(DVec3::Y));
+    // fov 90 along x: the plane at distance 1 is 2 wide, and 1 high at aspect 2.
+    assert!((cam.lens_width - 2.0).abs() < 1e-12 && (cam.lens_height - 1.0).abs() < 1e-12);
+    assert_eq!(b.scene.render.samples, Some(8));
+    assert_eq!(b.scene.render.max_depth, Some(7));
+    assert_eq!(b.scene.render.filter, PixelFilter::Tent { radius: 1.0 });
+    assert!(b.scene.render.srgb_output);
+}
+
+#[test]
+fn shapes_with_area_emitters_are_lights_and_share_their_bsdf() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf>
+        <shape type="rectangle"><ref id="red"/><emitter type="area"><rgb name="radiance" value="5"/></emitter></shape>
+        <shape type="cube"><ref id="red"/></shape>
+        <shape type="sphere"><float name="radius" value="2"/>
+            <transform name="to_world"><scale value="0.5"/><translate x="1"/></transform></shape>
+        </scene>"#
+    ));
+    let prims = &b.scene.primitives;
+    assert_eq!(prims.len(), 3);
+    assert!(std::sync::Arc::ptr_eq(&prims[0].material, &prims[1].material));
+    assert_eq!(
+        *prims[0].material,
+        Material::Diffuse { reflectance: Param::Constant(DVec3::new(0.8, 0.1, 0.1)) }
+    );
+    assert_eq!(b.scene.emitters, vec![Emitter::Area { primitive: 0, radiance: DVec3::splat(5.0) }]);
+    match &prims[2].shape {
+        crate::geometry::Shape::Sphere(s) => {
+            assert!((s.centre - DVec3::X).length() < 1e-12 && (s.radius - 1.0).abs() < 1e-12)
+        }
+        other => panic!("{other:?}"),
+    }
+    // Mitsuba's default material for a shape without a BSDF.
+    assert_eq!(*prims[2].material, Material::Diffuse { reflectance: Param::scalar(0.5) });
+}
+
+#[test]
+fn unsupported_plugins_are_warnings_naming_them() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <shape type="rectangle"><bsdf type="hair"/></shape>
+        <shape type="sdfgrid"/>
+        <emitter type="area_light_of_the_future"/>
+        </scene>"#
+    ));
+    let warnings: Vec<&str> = b
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Warning)
+        .map(|d| d.message.as_str())
+        .collect();
+    assert!(warnings.iter().any(|w| w.contains("`hair`")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.contains("`sdfgrid`")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.contains("`area_light_of_the_future`")), "{warnings:?}");
+    assert_eq!(b.scene.primitives.len(), 1);
+}
+
+#[test]
+fn bad_scenes_are_errors_at_their_place() {
+    let no_sensor = errors(r#"<scene version="3.0.0"><shape type="cube"/></scene>"#);
+    assert!(no_sensor[0].contains("no <sensor>"), "{no_sensor:?}");
+    let metal = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="cube"><bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf></shape></scene>"#
+    ));
+    assert!(metal[0].contains("unknown conductor `Unobtainium`"), "{metal:?}");
+    let ior = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="glas"/></bsdf></shape></scene>"#
+    ));
+    assert!(ior[0].contains("unknown index of refraction `glas`"), "{ior:?}");
+    let film = errors(
+        r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="2000000"/></film></sensor></scene>"#,
+    );
+    assert!(!film.is_empty());
+    let mesh = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="ply"><string name="filename" value="missing.ply"/></shape></scene>"#
+    ));
+    assert!(mesh[0].contains("`missing.ply` is not found"), "{mesh:?}");
+}
+
+#[test]
+fn named_iors_and_metals_resolve() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="water"/></bsdf></shape>
+        <shape type="cube"><bsdf type="roughconductor"><string name="material" value="Au"/>
+            <string name="distribution" value="ggx"/><float name="alpha" value="0.2"/></bsdf></shape>
+        </scene>"#
+    ));
+    match &*b.scene.primitives[0].material {
+        Material::Dielectric(i) => assert_eq!((i.int_ior, i.ext_ior), (1.333, 1.000277)),
+        other => panic!("{other:?}"),
+    }
+    match &*b.scene.primitives[1].material {
+        Material::RoughConductor { metal, microfacet } => {
+            assert_eq!(metal.eta, DVec3::new(0.143036, 0.375307, 1.44205));
+            assert_eq!(microfacet.alpha_u, Param::scalar(0.2));
+            assert_eq!(microfacet.distribution, crate::material::Distribution::Ggx);
+        }
+        other => panic!("{other:?}"),
+    }
+}
