@@ -144,6 +144,14 @@ pub struct RenderArgs {
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_aov)]
     pub aov: Vec<Aov>,
 
+    /// Show the render in a window as it converges, with a camera to fly (W/A/S/D, arrows, right
+    /// button and mouse), exposure (E, Shift+E), zoom (wheel) and pan (drag); S writes the image so
+    /// far, P prints the camera's pose as scene-file lines, D shows the denoised image (with
+    /// --denoise). The output is written when the render finishes, as without --preview; without
+    /// a display the render goes on without the window. See docs/preview.md.
+    #[arg(long)]
+    pub preview: bool,
+
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -235,6 +243,11 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         .transpose()
         .map_err(|e| fail(&e))?;
     let is_part = tile.is_some() || pass.is_some();
+    if args.preview && (is_part || args.checkpoint.is_some()) && !args.check {
+        return Err(usage(
+            "--preview shows a whole render as it converges: it does not combine with --tile, --pass or --checkpoint",
+        ));
+    }
     if let Some(checkpoint) = &args.checkpoint {
         // The checkpoint is removed once the output is written: the same file for both would
         // delete the finished image.
@@ -405,6 +418,18 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         return Ok(());
     }
 
+    if args.preview {
+        return crate::preview::run(crate::preview::Job {
+            args: &args,
+            scene_name: source.name().to_owned(),
+            prepared,
+            settings,
+            denoiser,
+            prepare_time,
+            syntax: crate::preview::PoseSyntax::Course,
+        });
+    }
+
     let bar = progress_bar(args.quiet);
     let report = |p: Progress| {
         let message = match p.stage {
@@ -476,42 +501,10 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         let part = Part::from_portion(header, &rows, portion.pixels);
         parts::write_part(&part, &args.output).map_err(|e| fail(&e.to_string()))?;
     } else {
-        let PortionPixels::Final(mut pixels) = portion.pixels else {
+        let PortionPixels::Final(pixels) = portion.pixels else {
             return Err(fail("internal error: a whole render gave partial sums"));
         };
-        if denoiser.is_some() || !args.aov.is_empty() {
-            let aov_started = Instant::now();
-            let aovs = raytracer::render::render_aovs(&prepared, &settings, DEFAULT_AOV_SAMPLES)
-                .map_err(|e| fail(&e.to_string()))?;
-            let aov_time = aov_started.elapsed();
-            if let Some(oidn) = &denoiser {
-                let started = Instant::now();
-                pixels = oidn
-                    .denoise(w, h, &pixels, &aovs.albedo, &aovs.normal, settings.threads)
-                    .map_err(|e| fail(&e))?;
-                if !args.quiet {
-                    outln!(
-                        "denoised with Open Image Denoise ({}) in {:.2} s, its albedo and normal images in {:.2} s",
-                        oidn.path().display(),
-                        started.elapsed().as_secs_f64(),
-                        aov_time.as_secs_f64()
-                    );
-                }
-            }
-            for &aov in &args.aov {
-                let data = match aov {
-                    Aov::Albedo => aovs.albedo.clone(),
-                    Aov::Normal => aovs.normal.clone(),
-                    Aov::Depth => aovs.depth.iter().map(|&d| [d; 3]).collect(),
-                };
-                let path = aov_path(&args.output, aov);
-                write_image(&Image::new(w, h, data), &path, false).map_err(|e| fail(&e.to_string()))?;
-                if !args.quiet {
-                    outln!("wrote {}", path.display());
-                }
-            }
-        }
-        write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
+        write_whole(&args, &prepared, &settings, denoiser.as_ref(), pixels)?;
     }
     if let Some(checkpoint) = checkpoint {
         crate::on_interrupt_say(None);
@@ -541,6 +534,52 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         };
         print_summary(&args.output, &pixels, &settings, &stats, prepare_time, render_time);
     }
+    Ok(())
+}
+
+/// What a finished whole render becomes: denoised (`--denoise`), its auxiliary images written
+/// (`--aov`), then the output file. The preview writes its finished renders through it too.
+pub fn write_whole(
+    args: &RenderArgs,
+    prepared: &PreparedScene,
+    settings: &RenderSettings,
+    denoiser: Option<&crate::oidn::Oidn>,
+    mut pixels: Vec<[f32; 3]>,
+) -> Result<(), ExitCode> {
+    let (w, h) = (settings.width, settings.height);
+    if denoiser.is_some() || !args.aov.is_empty() {
+        let aov_started = Instant::now();
+        let aovs = raytracer::render::render_aovs(prepared, settings, DEFAULT_AOV_SAMPLES)
+            .map_err(|e| fail(&e.to_string()))?;
+        let aov_time = aov_started.elapsed();
+        if let Some(oidn) = denoiser {
+            let started = Instant::now();
+            pixels = oidn
+                .denoise(w, h, &pixels, &aovs.albedo, &aovs.normal, settings.threads)
+                .map_err(|e| fail(&e))?;
+            if !args.quiet {
+                outln!(
+                    "denoised with Open Image Denoise ({}) in {:.2} s, its albedo and normal images in {:.2} s",
+                    oidn.path().display(),
+                    started.elapsed().as_secs_f64(),
+                    aov_time.as_secs_f64()
+                );
+            }
+        }
+        for &aov in &args.aov {
+            let data = match aov {
+                Aov::Albedo => aovs.albedo.clone(),
+                Aov::Normal => aovs.normal.clone(),
+                Aov::Depth => aovs.depth.iter().map(|&d| [d; 3]).collect(),
+            };
+            let path = aov_path(&args.output, aov);
+            write_image(&Image::new(w, h, data), &path, false).map_err(|e| fail(&e.to_string()))?;
+            if !args.quiet {
+                outln!("wrote {}", path.display());
+            }
+        }
+    }
+    write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
     Ok(())
 }
 
@@ -609,8 +648,8 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     bar
 }
 
-/// The summary of a render of `pixels` (what was rendered, as words).
-fn print_summary(
+/// The summary of a render of `pixels` (what was rendered, as words), after its output path.
+pub fn print_summary(
     output: &Path,
     pixels: &str,
     settings: &RenderSettings,
