@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use bytemuck::{Pod, Zeroable};
 use raytracer::image_io::{Image, write_image};
 use terrain::camera::{FlyCamera, Limits, Motion};
+use terrain::headless::OffscreenTarget;
 use terrain::render::{Acquired, Backend, Gpu, PresentSurface};
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -103,6 +104,7 @@ pub fn run(event_loop: EventLoop<Wake>, shared: &Shared, setup: &Setup) -> Resul
         shown: None,
         last_step: Instant::now(),
         dumped: 0,
+        capture_pending: false,
         title: String::new(),
     };
     event_loop.run_app(&mut app).map_err(|e| e.to_string())?;
@@ -165,6 +167,8 @@ struct App<'a> {
     shown: Option<Shown>,
     last_step: Instant,
     dumped: u32,
+    /// Whether the next picture drawn is to be captured (with the test folder).
+    capture_pending: bool,
     title: String,
 }
 
@@ -282,6 +286,7 @@ impl App<'_> {
         drop(state);
         self.upload(&shown);
         self.dump(&shown);
+        self.capture_pending = self.setup.dump_dir.is_some();
         self.shown = Some(shown);
         self.redraw();
     }
@@ -353,8 +358,10 @@ impl App<'_> {
     }
 
     fn draw(&mut self) -> Result<(), String> {
-        let (Some(running), Some(view)) = (&mut self.running, &self.view) else { return Ok(()) };
-        let Some((_, group, size)) = &running.texture else { return Ok(()) };
+        let Some(running) = &self.running else { return Ok(()) };
+        if running.texture.is_none() || self.view.is_none() {
+            return Ok(());
+        }
         let frame = match running.surface.acquire(&running.gpu).map_err(|e| e.to_string())? {
             Acquired::Frame(frame) => frame,
             Acquired::Skip => {
@@ -362,6 +369,22 @@ impl App<'_> {
                 return Ok(());
             }
         };
+        let target = running.surface.view(&frame);
+        self.paint(&target);
+        running.window.pre_present_notify();
+        running.gpu.queue.present(frame);
+        running.gpu.check().map_err(|e| e.to_string())?;
+        if self.capture_pending {
+            self.capture_pending = false;
+            self.capture();
+        }
+        Ok(())
+    }
+
+    /// Draws the image into `target` (a view in the surface's format, of the window's size).
+    fn paint(&self, target: &wgpu::TextureView) {
+        let (Some(running), Some(view)) = (&self.running, &self.view) else { return };
+        let Some((_, group, size)) = &running.texture else { return };
         let uniforms = ViewUniforms {
             zoom: view.zoom as f32,
             exposure: view.exposure_scale(),
@@ -370,7 +393,6 @@ impl App<'_> {
             pad: [0.0; 2],
         };
         running.gpu.queue.write_buffer(&running.uniforms, 0, bytemuck::bytes_of(&uniforms));
-        let target = running.surface.view(&frame);
         let mut encoder = running
             .gpu
             .device
@@ -379,7 +401,7 @@ impl App<'_> {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("preview"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target,
+                    view: target,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
@@ -397,9 +419,24 @@ impl App<'_> {
             pass.draw(0..3, 0..1);
         }
         running.gpu.queue.submit([encoder.finish()]);
-        running.window.pre_present_notify();
-        running.gpu.queue.present(frame);
-        running.gpu.check().map_err(|e| e.to_string())
+    }
+
+    /// Draws the window's picture again off-screen and writes it beside the dumped frame, as
+    /// `screen-NNNNN.png` (what the window shows, pixel for pixel).
+    fn capture(&self) {
+        let (Some(running), Some(dir)) = (&self.running, &self.setup.dump_dir) else { return };
+        let (width, height) = running.surface.size();
+        let path = dir.join(format!("screen-{:05}.png", self.dumped));
+        let result = OffscreenTarget::new(&running.gpu, running.surface.view_format(), width, height)
+            .map_err(|e| e.to_string())
+            .and_then(|target| {
+                self.paint(target.view());
+                target.read(&running.gpu).map_err(|e| e.to_string())
+            })
+            .and_then(|image| image.save(&path).map_err(|e| e.to_string()));
+        if let Err(e) = result {
+            errln!("warning: cannot write the preview's picture {}: {e}", path.display());
+        }
     }
 
     /// The title: the scene, what the image is, the exposure and the pixel under the cursor.
@@ -587,7 +624,8 @@ impl ApplicationHandler<Wake> for App<'_> {
                 self.redraw();
             }
             WindowEvent::Focused(false) => self.camera.release_all(),
-            WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
+            // Keys winit makes up for what was held when the focus came are not presses.
+            WindowEvent::KeyboardInput { event, is_synthetic: false, .. } => self.key(event_loop, &event),
             WindowEvent::ModifiersChanged(modifiers) => self.shift = modifiers.state().shift_key(),
             WindowEvent::MouseWheel { delta, .. } => {
                 let lines = match delta {
