@@ -37,6 +37,7 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render scene.txt --tile 2/8 -o part-2.exr   one of 8 tiles, for rayterra merge\n  \
     rayterra render scene.txt --model path --spp 64 --pass auto/16 -o pass.exr   in an array job\n  \
     rayterra render cornell-box.txt --model path --spp 16 --denoise -o out.exr   Open Image Denoise\n  \
+    rayterra render cornell-box.txt --model path --preview   watch it converge, fly the camera\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
     /// Scene file in the course scene language; without it, the built-in showcase scene.

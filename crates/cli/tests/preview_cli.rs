@@ -224,3 +224,68 @@ fn the_window_converges_ends_on_the_output_and_prints_the_pose() {
         .collect::<Vec<_>>();
     assert!(screens_before.iter().any(|s| *s != screen), "the window's picture never changed");
 }
+
+/// The session of the denoiser test: the render, then `D` once the output is written.
+const DENOISE_SCRIPT: &str = r#"
+"$BIN" render "$SCENE" --preview --denoise --model path --spp 4 --size 48x48 -o "$DIR/out.exr" \
+    > "$DIR/stdout.txt" 2> "$DIR/stderr.txt" &
+pid=$!
+for i in $(seq 1 1200); do [ -f "$DIR/out.exr" ] && break; sleep 0.1; done
+timeout 60 xdotool search --sync --onlyvisible --name '^rayterra preview' windowfocus --sync %1 \
+    sleep 0.5 key d sleep 3 key Escape
+keys=$?
+wait $pid
+status=$?
+echo "keys $keys status $status"
+"#;
+
+#[test]
+fn d_shows_the_denoised_image_which_is_the_denoised_output() {
+    if !have_tools() {
+        return;
+    }
+    let dir = tempfile::tempdir().expect("temp dir");
+    // OIDN, as the denoiser's own tests find it.
+    let probe = Command::new(env!("CARGO_BIN_EXE_rayterra"))
+        .args(["render", "--denoise", "--size", "4x4", "--spp", "1", "-q", "-o", "probe.exr"])
+        .current_dir(dir.path())
+        .output()
+        .expect("run rayterra");
+    if !probe.status.success() {
+        let reason = "Open Image Denoise not found (pip install pyoidn==2.5.1.0, or set OIDN_DIR)";
+        assert!(!under_ci(), "CI=true, so the preview's denoiser test cannot be skipped: {reason}");
+        test_skips::skip("rayterra render --preview --denoise window test", reason);
+        return;
+    }
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).expect("frames folder");
+    let out = Command::new("timeout")
+        .args(["180", "xvfb-run", "-a", "-s", "-screen 0 640x480x24", "bash", "-c", DENOISE_SCRIPT])
+        .env("BIN", env!("CARGO_BIN_EXE_rayterra"))
+        .env("SCENE", root().join("scenes/cornell-box.txt"))
+        .env("DIR", dir.path())
+        .env("RAYTERRA_PREVIEW_FRAMES", &frames)
+        .output()
+        .expect("run xvfb-run");
+    let read = |name: &str| std::fs::read_to_string(dir.path().join(name)).unwrap_or_default();
+    let (stdout, stderr) = (read("stdout.txt"), read("stderr.txt"));
+    let said = format!(
+        "xvfb-run: {}\nrayterra's stdout:\n{stdout}\nrayterra's stderr:\n{stderr}",
+        text(&out.stdout)
+    );
+    assert!(text(&out.stdout).contains("keys 0 status 0"), "{said}");
+    assert!(stdout.contains("preview: denoised image"), "{said}");
+    let mut shown: Vec<PathBuf> = std::fs::read_dir(&frames)
+        .expect("frames")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+        .collect();
+    shown.sort();
+    let output = pixels(&dir.path().join("out.exr"));
+    let last = pixels(shown.last().expect("frames shown"));
+    // The output is the denoised render; the last image shown is the same image, denoised by the
+    // preview on D.
+    assert!(last == output, "the denoised image shown is not the denoised output: {said}");
+    let noisy = &shown[shown.len() - 2];
+    assert!(pixels(noisy) != output, "the image before D was already the denoised one");
+}

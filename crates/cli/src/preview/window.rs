@@ -686,3 +686,17 @@ impl ApplicationHandler<Wake> for App<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_docs_list_every_key() {
+        let docs = include_str!("../../../../docs/preview.md");
+        for (keys, what) in KEYS {
+            assert!(docs.contains(&format!("| {keys} | {what} |")), "docs/preview.md lacks `{keys}`");
+        }
+        assert_eq!(controls().lines().count(), KEYS.len());
+    }
+}
