@@ -7,6 +7,7 @@
 #[macro_use]
 mod say;
 
+mod exr_layers;
 mod merge;
 mod oidn;
 mod preview;

@@ -6,6 +6,8 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::image_io::{Image, OutputFormat, check_output, write_image};
+
+use crate::exr_layers::AovLayer;
 use raytracer::integrator::aov::DEFAULT_AOV_SAMPLES;
 use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
@@ -140,8 +142,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub denoise: bool,
 
-    /// Also write auxiliary images beside the output, as `NAME.albedo.exr` and so on: albedo,
-    /// normal, depth (comma-separated), at the first non-specular surface each pixel sees.
+    /// Also write auxiliary images: albedo, normal, depth (comma-separated), at the first
+    /// non-specular surface each pixel sees. With an .exr output, as its layers (`albedo.R`,
+    /// `normal.X`, `depth.Z`, ...); with another, beside it as `NAME.albedo.exr` and so on.
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_aov)]
     pub aov: Vec<Aov>,
 
@@ -566,6 +569,30 @@ pub fn write_whole(
                     aov_time.as_secs_f64()
                 );
             }
+        }
+        if !args.aov.is_empty() && OutputFormat::from_path(&args.output).is_ok_and(|f| f == OutputFormat::Exr)
+        {
+            // Layers of the EXR output.
+            let layers: Vec<AovLayer> = args
+                .aov
+                .iter()
+                .map(|aov| match aov {
+                    Aov::Albedo => AovLayer::from_rgb("albedo", ["R", "G", "B"], &aovs.albedo),
+                    Aov::Normal => AovLayer::from_rgb("normal", ["X", "Y", "Z"], &aovs.normal),
+                    Aov::Depth => AovLayer::single("depth", "Z", aovs.depth.clone()),
+                })
+                .collect();
+            crate::exr_layers::write_with_layers(&args.output, w, h, &pixels, &layers)
+                .map_err(|e| fail(&e.to_string()))?;
+            if !args.quiet {
+                let names: Vec<&str> = args.aov.iter().map(|a| a.name()).collect();
+                outln!(
+                    "{} holds the auxiliary images as layers: {}",
+                    args.output.display(),
+                    names.join(", ")
+                );
+            }
+            return Ok(());
         }
         for &aov in &args.aov {
             let data = match aov {
