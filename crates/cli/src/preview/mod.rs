@@ -22,7 +22,7 @@ use raytracer::prepare::Hit;
 use raytracer::{PreparedScene, RenderSettings};
 
 pub use pose::PoseSyntax;
-use pose::{Pose, format_pose};
+use pose::{Pose, pose_note};
 
 use crate::oidn::Oidn;
 use crate::render::RenderArgs;
@@ -80,6 +80,8 @@ struct State {
     window_gone: bool,
     /// The worker has stopped.
     worker_done: bool,
+    /// The worker stopped on an error (said on the terminal): the window closes.
+    worker_failed: bool,
 }
 
 /// [`State`] behind a lock, with a signal for the worker waiting for a new pose.
@@ -139,7 +141,10 @@ pub fn run(job: Job<'_>) -> Result<(), ExitCode> {
     std::thread::scope(|scope| {
         let rendering = scope.spawn(|| {
             let result = worker::work(&shared, job, &wake);
-            shared.update(|s| s.worker_done = true);
+            shared.update(|s| {
+                s.worker_done = true;
+                s.worker_failed = result.is_err();
+            });
             wake();
             result
         });
@@ -164,17 +169,6 @@ pub fn run(job: Job<'_>) -> Result<(), ExitCode> {
 /// Says that the render goes on without a window, and why.
 fn no_window(reason: &str) {
     errln!("note: no preview window ({reason}); the render goes on without it and writes the same output");
-}
-
-/// The pose as scene-file lines, under a comment saying what it is.
-fn pose_note(pose: &Pose, syntax: PoseSyntax, scene: &str, when: &str) -> String {
-    let comment = match syntax {
-        PoseSyntax::Course => "//",
-    };
-    format!(
-        "{comment} the preview's camera {when}, for the camera block of {scene}:\n{}",
-        format_pose(pose, syntax)
-    )
 }
 
 /// The file `S` writes the image so far to: `render.png` gives `render.so-far.png`.
@@ -207,15 +201,5 @@ mod tests {
     fn the_image_so_far_is_named_beside_the_output() {
         assert_eq!(so_far_path(Path::new("out/box.png")), Path::new("out/box.so-far.png"));
         assert_eq!(so_far_path(Path::new("box.exr")), Path::new("box.so-far.exr"));
-    }
-
-    #[test]
-    fn a_pose_note_is_a_comment_then_the_camera_block() {
-        let pose = Pose { eye: glam::DVec3::new(1.0, 2.0, 3.0), dir: glam::DVec3::Y };
-        let note = pose_note(&pose, PoseSyntax::Course, "box.txt", "now");
-        assert_eq!(
-            note,
-            "// the preview's camera now, for the camera block of box.txt:\ncamera\n    O= 1 2 3\n    N= 0 1 0"
-        );
     }
 }

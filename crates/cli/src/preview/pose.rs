@@ -29,6 +29,18 @@ pub fn format_pose(pose: &Pose, syntax: PoseSyntax) -> String {
     }
 }
 
+/// The pose as scene-file lines under a comment of the file's syntax saying what it is: the
+/// camera `when` (e.g. "now"), for the scene file `scene`.
+pub fn pose_note(pose: &Pose, syntax: PoseSyntax, scene: &str, when: &str) -> String {
+    let comment = match syntax {
+        PoseSyntax::Course => "//",
+    };
+    format!(
+        "{comment} the preview's camera {when}, for the camera block of {scene}:\n{}",
+        format_pose(pose, syntax)
+    )
+}
+
 /// Three numbers separated by spaces, each as short as it can be and still read back as the
 /// same 32-bit value (the fly camera's precision).
 fn numbers(v: DVec3) -> String {
@@ -56,5 +68,15 @@ mod tests {
         let camera = &parsed.scene.camera;
         assert!((camera.eye - pose.eye).length() < 1e-6, "{:?}", camera.eye);
         assert!((camera.dir - pose.dir).length() < 1e-6, "{:?}", camera.dir);
+    }
+
+    #[test]
+    fn a_pose_note_is_a_comment_then_the_camera_block() {
+        let pose = Pose { eye: DVec3::new(1.0, 2.0, 3.0), dir: DVec3::Y };
+        let note = pose_note(&pose, PoseSyntax::Course, "box.txt", "now");
+        assert_eq!(
+            note,
+            "// the preview's camera now, for the camera block of box.txt:\ncamera\n    O= 1 2 3\n    N= 0 1 0"
+        );
     }
 }

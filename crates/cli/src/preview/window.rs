@@ -18,10 +18,11 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
+use super::Shared;
 use super::fly::{fly_camera, pose_of};
+use super::pose::pose_note;
 use super::pose::{Pose, PoseSyntax};
 use super::view::View;
-use super::{Shared, pose_note};
 
 /// The keys and the mouse, as the docs list them.
 pub const KEYS: &[(&str, &str)] = &[
@@ -261,8 +262,8 @@ impl App<'_> {
     /// Takes the worker's latest image (or its denoised image) if it is not the one shown.
     fn follow_worker(&mut self, event_loop: &ActiveEventLoop) {
         let state = self.shared.lock();
-        if state.worker_done && state.frame.as_ref().is_none_or(|f| !f.finished) {
-            // The render failed; its error is printed by the worker.
+        if state.worker_failed {
+            // Its error is printed by the worker.
             drop(state);
             event_loop.exit();
             return;

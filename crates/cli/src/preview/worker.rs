@@ -14,7 +14,8 @@ use raytracer::render::{Snapshot, Work, render_watched};
 use raytracer::{PreparedScene, RenderSettings, Sampling};
 
 use super::pose::Pose;
-use super::{Frame, Job, Shared, pose_note};
+use super::pose::pose_note;
+use super::{Frame, Job, Shared};
 
 /// The draft's side, as a fraction of the image's.
 const DRAFT_DIVISOR: u32 = 4;
@@ -79,8 +80,10 @@ pub(super) fn work(shared: &Shared, job: Job<'_>, wake: &(dyn Fn() + Sync)) -> R
         let rendered = if stopped(shared).is_break() {
             None
         } else {
+            let mut images = 0;
             let mut watch = |s: &Snapshot<'_>| {
-                publish(s, status(s, &settings, started.elapsed()), 1);
+                images += 1;
+                publish(s, status(s, &settings, images, started.elapsed()), 1);
                 stopped(shared)
             };
             render_watched(&prepared, &settings, &|_| {}, &mut watch).map_err(|e| fail(&e.to_string()))?
@@ -207,9 +210,9 @@ fn upscale(snapshot: &Snapshot<'_>, scale: u32, (width, height): (u32, u32)) -> 
     out
 }
 
-/// What a snapshot holds, for the title: samples, passes or rows so far, the run, the time
-/// and the rays a second.
-fn status(s: &Snapshot<'_>, settings: &RenderSettings, elapsed: Duration) -> String {
+/// What a snapshot (the `images`th of its render) holds, for the title: samples (and batches),
+/// passes or rows so far, the run, the time and the rays a second.
+fn status(s: &Snapshot<'_>, settings: &RenderSettings, images: u64, elapsed: Duration) -> String {
     let runs = settings.runs;
     let run = if runs > 1 { format!(", run {}/{runs}", s.run + 1) } else { String::new() };
     let work = match (s.finished, s.work) {
@@ -218,7 +221,10 @@ fn status(s: &Snapshot<'_>, settings: &RenderSettings, elapsed: Duration) -> Str
             Model::Sppm => format!("finished, {} passes{run}", settings_passes(s)),
             Model::Classic | Model::Photon => format!("finished{run}"),
         },
-        (false, Work::Samples) => format!("{}/{} samples a pixel", s.done, s.total),
+        (false, Work::Samples) => {
+            let batches = if images == 1 { "batch" } else { "batches" };
+            format!("{}/{} samples a pixel in {images} {batches}", s.done, s.total)
+        }
         (false, Work::Passes) => format!("pass {}/{}{run}", s.done, s.total),
         (false, Work::Rows) => {
             let sampling = match settings.sampling {
@@ -266,5 +272,48 @@ mod tests {
         assert_eq!(big.len(), 6);
         assert_eq!(&big[..3], &[pixels[0], pixels[0], pixels[1]]);
         assert_eq!(&big[3..], &big[..3]);
+    }
+
+    #[test]
+    fn the_status_says_samples_passes_or_rows_time_and_rays() {
+        let pixels = [[0.0; 3]];
+        let stats = RenderStats { rays: 3_000_000, ..RenderStats::default() };
+        let shot = |work, done, total| Snapshot {
+            width: 1,
+            height: 1,
+            pixels: &pixels,
+            work,
+            done,
+            total,
+            run: 0,
+            stats,
+            finished: false,
+        };
+        let settings = RenderSettings {
+            width: 1,
+            height: 1,
+            sampling: Sampling::Uniform(64),
+            threads: None,
+            seed: 0,
+            model: Model::Path,
+            photons: None,
+            memory_limit: 1 << 30,
+            max_depth: 10,
+            passes: None,
+            runs: 1,
+        };
+        let second = Duration::from_secs(2);
+        assert_eq!(
+            status(&shot(Work::Samples, 3, 64), &settings, 2, second),
+            "3/64 samples a pixel in 2 batches, 2.0 s, 1.5 M rays/s"
+        );
+        assert_eq!(
+            status(&shot(Work::Passes, 5, 64), &settings, 5, second),
+            "pass 5/64, 2.0 s, 1.5 M rays/s"
+        );
+        assert_eq!(
+            status(&shot(Work::Rows, 96, 384), &settings, 4, second),
+            "rows 96/384 (64 samples a pixel), 2.0 s, 1.5 M rays/s"
+        );
     }
 }
