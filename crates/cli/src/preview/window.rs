@@ -483,12 +483,7 @@ impl App<'_> {
             _ => None,
         };
         if let Some(motion) = motion {
-            if code == KeyCode::KeyD && !pressed {
-                // D and Right both fly right: stop only if Right is not the one held.
-                self.camera.set_held(motion, false);
-            } else {
-                self.camera.set_held(motion, pressed);
-            }
+            self.camera.set_held(motion, pressed);
             self.last_step = Instant::now();
             return;
         }
