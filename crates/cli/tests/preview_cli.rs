@@ -101,6 +101,15 @@ fn have_tools() -> bool {
     false
 }
 
+/// Whether the window could not be opened under Xvfb (no GPU adapter, not even a software
+/// one): then the test is skipped loudly (a failure under CI, which installs Mesa's lavapipe).
+fn no_window_here(stderr: &str) -> bool {
+    let Some(line) = stderr.lines().find(|l| l.starts_with("note: no preview window")) else { return false };
+    assert!(!under_ci(), "CI=true, so the preview window test cannot be skipped: {line}");
+    test_skips::skip("rayterra render --preview window test", line);
+    true
+}
+
 /// The session: the render in the background, waiting for its output, a copy of it, then keys.
 const SCRIPT: &str = r#"
 "$BIN" render "$SCENE" --preview --model path --spp 64 --threads 1 --size 64x64 -o "$DIR/out.exr" \
@@ -155,6 +164,9 @@ fn the_window_converges_ends_on_the_output_and_prints_the_pose() {
         text(&out.stdout),
         text(&out.stderr)
     );
+    if no_window_here(&stderr) {
+        return;
+    }
     assert!(text(&out.stdout).contains("keys 0 status 0"), "{said}");
     assert!(!stderr.contains("panicked"), "{said}");
     assert!(stdout.contains("preview on "), "the window did not open: {said}");
@@ -273,6 +285,9 @@ fn d_shows_the_denoised_image_which_is_the_denoised_output() {
         "xvfb-run: {}\nrayterra's stdout:\n{stdout}\nrayterra's stderr:\n{stderr}",
         text(&out.stdout)
     );
+    if no_window_here(&stderr) {
+        return;
+    }
     assert!(text(&out.stdout).contains("keys 0 status 0"), "{said}");
     assert!(stdout.contains("preview: denoised image"), "{said}");
     let mut shown: Vec<PathBuf> = std::fs::read_dir(&frames)
