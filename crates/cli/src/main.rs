@@ -7,8 +7,10 @@
 #[macro_use]
 mod say;
 
+mod exr_layers;
 mod merge;
 mod oidn;
+mod preview;
 mod render;
 mod same_file;
 mod size;
@@ -70,7 +72,9 @@ fn stop_on_interrupt() {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    if matches!(cli.command, Command::Terrain(_)) {
+    if matches!(&cli.command, Command::Terrain(_))
+        || matches!(&cli.command, Command::Render(args) if args.preview)
+    {
         terrain::quiet_vulkan_device_select();
     }
     stop_on_interrupt();

@@ -6,6 +6,8 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use raytracer::image_io::{Image, OutputFormat, check_output, write_image};
+
+use crate::exr_layers::AovLayer;
 use raytracer::integrator::aov::DEFAULT_AOV_SAMPLES;
 use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
@@ -37,6 +39,7 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render scene.txt --tile 2/8 -o part-2.exr   one of 8 tiles, for rayterra merge\n  \
     rayterra render scene.txt --model path --spp 64 --pass auto/16 -o pass.exr   in an array job\n  \
     rayterra render cornell-box.txt --model path --spp 16 --denoise -o out.exr   Open Image Denoise\n  \
+    rayterra render cornell-box.txt --model path --preview   watch it converge, fly the camera\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
     /// Scene file in the course scene language; without it, the built-in showcase scene.
@@ -139,10 +142,19 @@ pub struct RenderArgs {
     #[arg(long)]
     pub denoise: bool,
 
-    /// Also write auxiliary images beside the output, as `NAME.albedo.exr` and so on: albedo,
-    /// normal, depth (comma-separated), at the first non-specular surface each pixel sees.
+    /// Also write auxiliary images: albedo, normal, depth (comma-separated), at the first
+    /// non-specular surface each pixel sees. With an .exr output, as its layers (`albedo.R`,
+    /// `normal.X`, `depth.Z`, ...); with another, beside it as `NAME.albedo.exr` and so on.
     #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = parse_aov)]
     pub aov: Vec<Aov>,
+
+    /// Show the render in a window as it converges, with a camera to fly (W/A/S/D, arrows, right
+    /// button and mouse), exposure (E, Shift+E), zoom (wheel) and pan (drag); S writes the image so
+    /// far, P prints the camera's pose as scene-file lines, D shows the denoised image (with
+    /// --denoise). The output is written when the render finishes, as without --preview; without
+    /// a display the render goes on without the window. See docs/preview.md.
+    #[arg(long)]
+    pub preview: bool,
 
     /// Print nothing but warnings and errors.
     #[arg(short, long)]
@@ -235,6 +247,11 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         .transpose()
         .map_err(|e| fail(&e))?;
     let is_part = tile.is_some() || pass.is_some();
+    if args.preview && (is_part || args.checkpoint.is_some()) && !args.check {
+        return Err(usage(
+            "--preview shows a whole render as it converges: it does not combine with --tile, --pass or --checkpoint",
+        ));
+    }
     if let Some(checkpoint) = &args.checkpoint {
         // The checkpoint is removed once the output is written: the same file for both would
         // delete the finished image.
@@ -405,6 +422,18 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         return Ok(());
     }
 
+    if args.preview {
+        return crate::preview::run(crate::preview::Job {
+            args: &args,
+            scene_name: source.name().to_owned(),
+            prepared,
+            settings,
+            denoiser,
+            prepare_time,
+            syntax: crate::preview::PoseSyntax::Course,
+        });
+    }
+
     let bar = progress_bar(args.quiet);
     let report = |p: Progress| {
         let message = match p.stage {
@@ -476,42 +505,10 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         let part = Part::from_portion(header, &rows, portion.pixels);
         parts::write_part(&part, &args.output).map_err(|e| fail(&e.to_string()))?;
     } else {
-        let PortionPixels::Final(mut pixels) = portion.pixels else {
+        let PortionPixels::Final(pixels) = portion.pixels else {
             return Err(fail("internal error: a whole render gave partial sums"));
         };
-        if denoiser.is_some() || !args.aov.is_empty() {
-            let aov_started = Instant::now();
-            let aovs = raytracer::render::render_aovs(&prepared, &settings, DEFAULT_AOV_SAMPLES)
-                .map_err(|e| fail(&e.to_string()))?;
-            let aov_time = aov_started.elapsed();
-            if let Some(oidn) = &denoiser {
-                let started = Instant::now();
-                pixels = oidn
-                    .denoise(w, h, &pixels, &aovs.albedo, &aovs.normal, settings.threads)
-                    .map_err(|e| fail(&e))?;
-                if !args.quiet {
-                    outln!(
-                        "denoised with Open Image Denoise ({}) in {:.2} s, its albedo and normal images in {:.2} s",
-                        oidn.path().display(),
-                        started.elapsed().as_secs_f64(),
-                        aov_time.as_secs_f64()
-                    );
-                }
-            }
-            for &aov in &args.aov {
-                let data = match aov {
-                    Aov::Albedo => aovs.albedo.clone(),
-                    Aov::Normal => aovs.normal.clone(),
-                    Aov::Depth => aovs.depth.iter().map(|&d| [d; 3]).collect(),
-                };
-                let path = aov_path(&args.output, aov);
-                write_image(&Image::new(w, h, data), &path, false).map_err(|e| fail(&e.to_string()))?;
-                if !args.quiet {
-                    outln!("wrote {}", path.display());
-                }
-            }
-        }
-        write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
+        write_whole(&args, &prepared, &settings, denoiser.as_ref(), pixels)?;
     }
     if let Some(checkpoint) = checkpoint {
         crate::on_interrupt_say(None);
@@ -541,6 +538,76 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         };
         print_summary(&args.output, &pixels, &settings, &stats, prepare_time, render_time);
     }
+    Ok(())
+}
+
+/// What a finished whole render becomes: denoised (`--denoise`), its auxiliary images written
+/// (`--aov`), then the output file. The preview writes its finished renders through it too.
+pub fn write_whole(
+    args: &RenderArgs,
+    prepared: &PreparedScene,
+    settings: &RenderSettings,
+    denoiser: Option<&crate::oidn::Oidn>,
+    mut pixels: Vec<[f32; 3]>,
+) -> Result<(), ExitCode> {
+    let (w, h) = (settings.width, settings.height);
+    if denoiser.is_some() || !args.aov.is_empty() {
+        let aov_started = Instant::now();
+        let aovs = raytracer::render::render_aovs(prepared, settings, DEFAULT_AOV_SAMPLES)
+            .map_err(|e| fail(&e.to_string()))?;
+        let aov_time = aov_started.elapsed();
+        if let Some(oidn) = denoiser {
+            let started = Instant::now();
+            pixels = oidn
+                .denoise(w, h, &pixels, &aovs.albedo, &aovs.normal, settings.threads)
+                .map_err(|e| fail(&e))?;
+            if !args.quiet {
+                outln!(
+                    "denoised with Open Image Denoise ({}) in {:.2} s, its albedo and normal images in {:.2} s",
+                    oidn.path().display(),
+                    started.elapsed().as_secs_f64(),
+                    aov_time.as_secs_f64()
+                );
+            }
+        }
+        if !args.aov.is_empty() && OutputFormat::from_path(&args.output).is_ok_and(|f| f == OutputFormat::Exr)
+        {
+            // Layers of the EXR output.
+            let layers: Vec<AovLayer> = args
+                .aov
+                .iter()
+                .map(|aov| match aov {
+                    Aov::Albedo => AovLayer::from_rgb("albedo", ["R", "G", "B"], &aovs.albedo),
+                    Aov::Normal => AovLayer::from_rgb("normal", ["X", "Y", "Z"], &aovs.normal),
+                    Aov::Depth => AovLayer::single("depth", "Z", aovs.depth.clone()),
+                })
+                .collect();
+            crate::exr_layers::write_with_layers(&args.output, w, h, &pixels, &layers)
+                .map_err(|e| fail(&e.to_string()))?;
+            if !args.quiet {
+                let names: Vec<&str> = args.aov.iter().map(|a| a.name()).collect();
+                outln!(
+                    "{} holds the auxiliary images as layers: {}",
+                    args.output.display(),
+                    names.join(", ")
+                );
+            }
+            return Ok(());
+        }
+        for &aov in &args.aov {
+            let data = match aov {
+                Aov::Albedo => aovs.albedo.clone(),
+                Aov::Normal => aovs.normal.clone(),
+                Aov::Depth => aovs.depth.iter().map(|&d| [d; 3]).collect(),
+            };
+            let path = aov_path(&args.output, aov);
+            write_image(&Image::new(w, h, data), &path, false).map_err(|e| fail(&e.to_string()))?;
+            if !args.quiet {
+                outln!("wrote {}", path.display());
+            }
+        }
+    }
+    write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
     Ok(())
 }
 
@@ -609,8 +676,8 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     bar
 }
 
-/// The summary of a render of `pixels` (what was rendered, as words).
-fn print_summary(
+/// The summary of a render of `pixels` (what was rendered, as words), after its output path.
+pub fn print_summary(
     output: &Path,
     pixels: &str,
     settings: &RenderSettings,

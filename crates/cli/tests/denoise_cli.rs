@@ -3,6 +3,8 @@
 //! it (and fail under CI=true, whose `.ci/run` installs `pyoidn` in target/mitsuba-venv).
 
 use std::path::{Path, PathBuf};
+
+use exr::prelude::{ReadChannels, ReadLayers};
 use std::process::{Command, Output};
 
 fn rayterra(args: &[&str], dir: &Path, env: &[(&str, &str)]) -> Output {
@@ -71,8 +73,27 @@ fn a_missing_library_is_a_clear_error_before_rendering() {
     assert!(text(&out.stderr).contains("unknown place `pip`"), "{}", text(&out.stderr));
 }
 
+/// The channels of an EXR file by name (every layer's).
+fn exr_channels(path: &Path) -> Vec<(String, Vec<f32>)> {
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+        .collect()
+}
+
 #[test]
-fn aov_writes_albedo_normal_and_depth_beside_the_output() {
+fn aov_writes_albedo_normal_and_depth_as_layers_of_an_exr() {
     let dir = tempfile::tempdir().expect("temp dir");
     let args = [
         "render",
@@ -88,17 +109,71 @@ fn aov_writes_albedo_normal_and_depth_beside_the_output() {
     ];
     let out = rayterra(&[&args[..], &["-o", "box.exr"]].concat(), dir.path(), &[]);
     assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(text(&out.stdout).contains("holds the auxiliary images as layers: albedo, normal, depth"));
+    assert!(!dir.path().join("box.albedo.exr").exists(), "an EXR output holds them: nothing beside it");
+    let channels = exr_channels(&dir.path().join("box.exr"));
+    let names: Vec<&str> = channels.iter().map(|(n, _)| n.as_str()).collect();
+    for name in
+        ["R", "G", "B", "albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "depth.Z"]
+    {
+        assert!(names.contains(&name), "no channel {name} in {names:?}");
+    }
+    let channel = |name: &str| &channels.iter().find(|(n, _)| n == name).expect("a channel").1;
+    let zip3 = |a: &str, b: &str, c: &str| -> Vec<[f32; 3]> {
+        (0..576).map(|i| [channel(a)[i], channel(b)[i], channel(c)[i]]).collect()
+    };
+    let albedo = zip3("albedo.R", "albedo.G", "albedo.B");
+    let normal = zip3("normal.X", "normal.Y", "normal.Z");
+    let depth = channel("depth.Z");
+    assert_eq!((albedo.len(), normal.len(), depth.len()), (576, 576, 576));
+    assert!(albedo.iter().flatten().all(|c| (0.0..=1.0).contains(c)));
+    assert!(normal.iter().all(|n| n.iter().map(|c| c * c).sum::<f32>() <= 1.0 + 1e-5));
+    // The box's back wall is about 4 units away from the camera at y = -3.9.
+    let centre = depth[12 * 24 + 12];
+    assert!(centre > 2.0 && centre < 6.0, "{centre}");
+    // The image's channels are the render without --aov.
+    let out = rayterra(&[&args[..8], &["-o", "plain.exr"]].concat(), dir.path(), &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert_eq!(pixels(&dir.path().join("plain.exr")), zip3("R", "G", "B"));
+    assert_eq!(
+        pixels(&dir.path().join("box.exr")),
+        zip3("R", "G", "B"),
+        "readers of plain EXR files see the image"
+    );
+    // Same bytes with another thread count.
+    let out = rayterra(&[&args[..], &["--threads", "1", "-o", "one.exr"]].concat(), dir.path(), &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let read = |name: &str| std::fs::read(dir.path().join(name)).expect("read");
+    assert!(read("box.exr") == read("one.exr"), "the layered file differs between thread counts");
+}
+
+#[test]
+fn aov_writes_albedo_normal_and_depth_beside_other_outputs() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let args = [
+        "render",
+        &cornell(),
+        "--model",
+        "path",
+        "--size",
+        "24x24",
+        "--spp",
+        "1",
+        "--aov",
+        "albedo,normal,depth",
+    ];
+    let out = rayterra(&[&args[..], &["-o", "box.png"]].concat(), dir.path(), &[]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
     let albedo = pixels(&dir.path().join("box.albedo.exr"));
     let normal = pixels(&dir.path().join("box.normal.exr"));
     let depth = pixels(&dir.path().join("box.depth.exr"));
     assert_eq!((albedo.len(), normal.len(), depth.len()), (576, 576, 576));
     assert!(albedo.iter().flatten().all(|c| (0.0..=1.0).contains(c)));
     assert!(normal.iter().all(|n| n.iter().map(|c| c * c).sum::<f32>() <= 1.0 + 1e-5));
-    // The box's back wall is about 4 units away from the camera at y = -3.9.
     let centre = depth[12 * 24 + 12][0];
     assert!(centre > 2.0 && centre < 6.0, "{centre}");
     // Same bytes with another thread count.
-    let out = rayterra(&[&args[..], &["--threads", "1", "-o", "one.exr"]].concat(), dir.path(), &[]);
+    let out = rayterra(&[&args[..], &["--threads", "1", "-o", "one.png"]].concat(), dir.path(), &[]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     for name in ["albedo", "normal", "depth"] {
         let a = std::fs::read(dir.path().join(format!("box.{name}.exr"))).expect("read");
@@ -164,7 +239,8 @@ fn sixteen_denoised_samples_beat_256_plain_ones_and_keep_edges() {
         scene.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
     let cache = root().join("target/denoise-reference");
     std::fs::create_dir_all(&cache).expect("a cache folder");
-    let reference_path = cache.join(format!("cornell-{key:016x}-{size}-path-4096.exr"));
+    // (Its normals are a layer of the file, `normal.X` and so on.)
+    let reference_path = cache.join(format!("cornell-{key:016x}-{size}-path-4096-normal-layer.exr"));
     if !reference_path.exists() {
         let partial = cache.join(format!("{}.{}.tmp.exr", key, std::process::id()));
         let out = rayterra(
@@ -174,12 +250,14 @@ fn sixteen_denoised_samples_beat_256_plain_ones_and_keep_edges() {
             &[],
         );
         assert!(out.status.success(), "{}", text(&out.stderr));
-        std::fs::rename(partial.with_extension("normal.exr"), reference_path.with_extension("normal.exr"))
-            .expect("kept");
         std::fs::rename(&partial, &reference_path).expect("kept");
     }
     let reference = pixels(&reference_path);
-    let normal = pixels(&reference_path.with_extension("normal.exr"));
+    let channels = exr_channels(&reference_path);
+    let channel = |name: &str| &channels.iter().find(|(n, _)| n == name).expect("the normal layer").1;
+    let normal: Vec<[f32; 3]> = (0..reference.len())
+        .map(|i| [channel("normal.X")[i], channel("normal.Y")[i], channel("normal.Z")[i]])
+        .collect();
     for (name, spp, denoise) in
         [("noisy16.exr", "16", false), ("denoised16.exr", "16", true), ("plain256.exr", "256", false)]
     {

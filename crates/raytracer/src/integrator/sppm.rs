@@ -34,6 +34,7 @@
 //! order, and every pixel sums its photons in the map's fixed order, so the image does not depend
 //! on the thread count, and any set of rows renders to the same values on its own.
 
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -263,11 +264,20 @@ pub fn render(
     rows: &Rows,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<DVec3>, SppmStats) {
-    render_from(scene, camera, settings, rows, SppmState::new(rows.len()), &mut |_| {}, progress)
+    render_from(
+        scene,
+        camera,
+        settings,
+        rows,
+        SppmState::new(rows.len()),
+        &mut |_| ControlFlow::Continue(()),
+        progress,
+    )
 }
 
 /// [`render`] from `state` (the state after some passes of the same render, or
-/// [`SppmState::new`]), calling `after_pass` with the state after each pass.
+/// [`SppmState::new`]), calling `after_pass` with the state after each pass but the last. When
+/// `after_pass` breaks, the render stops there and returns the image of the passes done.
 ///
 /// # Panics
 /// If `state` is not a state of `rows.len()` pixels.
@@ -277,7 +287,7 @@ pub fn render_from(
     settings: &SppmSettings,
     rows: &Rows,
     state: SppmState,
-    after_pass: &mut dyn FnMut(&SppmState),
+    after_pass: &mut dyn FnMut(&SppmState) -> ControlFlow<()>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<DVec3>, SppmStats) {
     let lights = Lights::new(scene);
@@ -295,6 +305,7 @@ pub fn render_from(
     let cam = &scene.scene.camera;
     let pixel_angle = cam.lens_width / image_width as f64;
     let mut photon_seconds = stats.photon_seconds;
+    let mut passes_run = settings.passes;
     for pass in passes_done..settings.passes {
         // 1. Camera pass.
         points.par_chunks_mut(w).zip(states.par_chunks_mut(w)).enumerate().for_each(
@@ -416,13 +427,17 @@ pub fn render_from(
             let stats = SppmStats { rays: rays.load(Ordering::Relaxed), photon_seconds, ..stats };
             // The pixel states move into the saved state and back: no copy.
             let saved = SppmState { passes_done: pass + 1, pixels: std::mem::take(&mut states), stats };
-            after_pass(&saved);
+            let flow = after_pass(&saved);
             states = saved.pixels;
+            if flow.is_break() {
+                passes_run = pass + 1;
+                break;
+            }
         }
     }
 
-    let passes = settings.passes.max(1) as f64;
-    let emitted = (settings.passes * settings.photons).max(1) as f64;
+    let passes = passes_run.max(1) as f64;
+    let emitted = (passes_run * settings.photons).max(1) as f64;
     let (mut radius_sum, mut with_radius) = (0.0, 0u64);
     let image = states
         .iter()

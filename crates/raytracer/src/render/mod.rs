@@ -16,12 +16,14 @@ use std::ops::Range;
 
 pub mod checkpoint;
 mod run;
+mod watch;
 
 pub use crate::base::memory::DEFAULT_MEMORY_LIMIT;
 pub use crate::base::rows::Rows;
 use checkpoint::{Checkpoint, CheckpointError, Estimate};
 pub use run::{path_sums, run_seed};
 use run::{render_rows_run, render_sppm_run};
+pub use watch::{Snapshot, Work, render_watched};
 
 use crate::base::image_io::Image;
 use crate::base::sampler::ExactSum;
@@ -238,40 +240,8 @@ pub fn render_portion_resumable(
     progress: &(dyn Fn(Progress) + Sync),
     mut checkpoint: Option<&mut Checkpoint>,
 ) -> Result<Portion, RenderError> {
-    check_image_size(settings.width, settings.height).map_err(RenderError::ImageSize)?;
-    if let Sampling::Uniform(n) = settings.sampling
-        && !(1..=MAX_SPP).contains(&n)
-    {
-        return Err(RenderError::SampleCount(n));
-    }
-    if !(1..=MAX_DEPTH_LIMIT).contains(&settings.max_depth) {
-        return Err(RenderError::Depth(settings.max_depth));
-    }
-    if !(1..=MAX_RUNS).contains(&settings.runs) || runs.is_empty() || runs.end > settings.runs {
-        return Err(RenderError::Runs { runs, total: settings.runs });
-    }
-    if rows.width() != settings.width || rows.blocks().last().is_some_and(|b| b.end > settings.height) {
-        return Err(RenderError::ImageSize(format!(
-            "the rows asked for do not fit a {}x{} image",
-            settings.width, settings.height
-        )));
-    }
-    match settings.model {
-        Model::Photon => photon::check_memory(&settings.photon_settings(scene), settings.memory_limit),
-        Model::Sppm => sppm::check_memory(
-            &settings.photon_settings(scene),
-            settings.width as u64 * settings.height as u64,
-            settings.max_depth,
-            settings.memory_limit,
-        ),
-        Model::Classic | Model::Path => Ok(()),
-    }
-    .map_err(|d| RenderError::Settings(Box::new(d)))?;
-    let threads = settings.threads.unwrap_or(0);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|source| RenderError::Threads { threads, source })?;
+    check_settings(scene, settings, rows, &runs)?;
+    let pool = thread_pool(settings)?;
     let whole = runs.start == 0 && runs.end == settings.runs;
     pool.install(|| {
         let mut stats = RenderStats { threads: rayon::current_num_threads(), ..RenderStats::default() };
@@ -321,6 +291,54 @@ pub fn render_portion_resumable(
         };
         Ok(Portion { pixels, stats })
     })
+}
+
+/// Refuses settings a render of `rows` and `runs` cannot start with.
+fn check_settings(
+    scene: &PreparedScene,
+    settings: &RenderSettings,
+    rows: &Rows,
+    runs: &Range<u32>,
+) -> Result<(), RenderError> {
+    check_image_size(settings.width, settings.height).map_err(RenderError::ImageSize)?;
+    if let Sampling::Uniform(n) = settings.sampling
+        && !(1..=MAX_SPP).contains(&n)
+    {
+        return Err(RenderError::SampleCount(n));
+    }
+    if !(1..=MAX_DEPTH_LIMIT).contains(&settings.max_depth) {
+        return Err(RenderError::Depth(settings.max_depth));
+    }
+    if !(1..=MAX_RUNS).contains(&settings.runs) || runs.is_empty() || runs.end > settings.runs {
+        return Err(RenderError::Runs { runs: runs.clone(), total: settings.runs });
+    }
+    if rows.width() != settings.width || rows.blocks().last().is_some_and(|b| b.end > settings.height) {
+        return Err(RenderError::ImageSize(format!(
+            "the rows asked for do not fit a {}x{} image",
+            settings.width, settings.height
+        )));
+    }
+    match settings.model {
+        Model::Photon => photon::check_memory(&settings.photon_settings(scene), settings.memory_limit),
+        Model::Sppm => sppm::check_memory(
+            &settings.photon_settings(scene),
+            settings.width as u64 * settings.height as u64,
+            settings.max_depth,
+            settings.memory_limit,
+        ),
+        Model::Classic | Model::Path => Ok(()),
+    }
+    .map_err(|d| RenderError::Settings(Box::new(d)))?;
+    Ok(())
+}
+
+/// The worker threads of a render.
+fn thread_pool(settings: &RenderSettings) -> Result<rayon::ThreadPool, RenderError> {
+    let threads = settings.threads.unwrap_or(0);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|source| RenderError::Threads { threads, source })
 }
 
 /// The auxiliary images (albedo, normal, depth; see [`crate::integrator::aov`]) of the render

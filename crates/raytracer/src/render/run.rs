@@ -157,6 +157,7 @@ pub(super) fn render_sppm_run(
         {
             failure = c.save_sppm(run, state).err();
         }
+        std::ops::ControlFlow::Continue(())
     };
     let (colors, sppm_stats) =
         sppm::render_from(scene, &camera, &sppm_settings, rows, start, &mut after_pass, &report);
