@@ -15,6 +15,7 @@
 pub mod adaptive;
 pub mod aov;
 pub mod bsdf;
+pub mod bsdfs;
 pub mod classic;
 pub mod course_lobes;
 pub mod lights;
