@@ -9,7 +9,6 @@ use raytracer::image_io::{Image, OutputFormat, check_output, write_image};
 
 use crate::exr_layers::AovLayer;
 use raytracer::integrator::aov::DEFAULT_AOV_SAMPLES;
-use raytracer::integrator::path::DEFAULT_MAX_DEPTH;
 use raytracer::integrator::photon::{self, PhotonStats};
 use raytracer::integrator::sppm::SppmStats;
 use raytracer::integrator::{Model, choose_model};
@@ -118,10 +117,10 @@ pub struct RenderArgs {
     pub checkpoint: Option<PathBuf>,
 
     /// Longest light path of the path and sppm models, in segments (1: lights seen directly; 2:
-    /// direct light; ...).
-    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_DEPTH,
+    /// direct light; ...). Default: the Mitsuba scene's own `max_depth`, else 10.
+    #[arg(long, value_name = "N",
           value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH_LIMIT as i64))]
-    pub max_depth: u32,
+    pub max_depth: Option<u32>,
 
     /// Most memory the scene's textures and the photon map may take together, e.g. 512M or 8G.
     #[arg(long, value_name = "SIZE", default_value = "4G", value_parser = parse_byte_size)]
@@ -280,33 +279,13 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
         Some(path) => SourceFile::read(path).map_err(|e| fail(&e.to_string()))?,
         None => SourceFile::from_text(SHOWCASE_NAME, None, SHOWCASE.to_owned()),
     };
-    if is_mitsuba_scene(&source) {
-        return mitsuba_scene(source, &args);
-    }
-    if !args.defines.is_empty() {
-        errln!(
-            "warning: -D applies to Mitsuba 3 scene files only; `{}` is a course scene file",
-            source.name()
-        );
-    }
-    let parsed = scene::parse(&source).map_err(|e| {
-        print_diagnostics_with(&e.diagnostics, e.omitted);
-        let n = e.error_count();
-        fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
-    })?;
-    // With --size, the file's own aspect warning names a size that is not rendered: it is given
-    // again below for the size that is.
-    let file_aspect = {
-        let cam = &parsed.scene.camera;
-        args.size.and_then(|_| scene::aspect_mismatch(cam, cam.image_width, cam.image_height))
+    let mitsuba = is_mitsuba_scene(&source);
+    let (scene, extra_inputs) = if mitsuba {
+        let built = mitsuba_scene(&source, &args)?;
+        (built.scene, built.inputs)
+    } else {
+        (course_scene(&source, &args)?, Vec::new())
     };
-    let diagnostics: Vec<Diagnostic> = parsed
-        .diagnostics
-        .iter()
-        .filter(|d| d.is_error() || file_aspect.as_deref() != Some(d.message.as_str()))
-        .cloned()
-        .collect();
-    print_diagnostics_with(&diagnostics, parsed.omitted);
 
     for dir in &args.textures {
         if !dir.is_dir() {
@@ -317,13 +296,14 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let search =
         TextureSearch { scene_dir: source.dir().map(Path::to_path_buf), extra_dirs: args.textures.clone() };
     let budget = MemoryBudget::new(args.memory_limit);
-    let prepared = PreparedScene::with_budget(parsed.scene, &search, &budget).map_err(|errors| {
+    let mut prepared = PreparedScene::with_budget(scene, &search, &budget).map_err(|errors| {
         print_diagnostics(&errors);
         fail(&format!(
             "`{}` names textures or meshes that cannot be used; nothing was rendered",
             source.name()
         ))
     })?;
+    prepared.inputs.splice(0..0, extra_inputs);
     print_diagnostics(&prepared.diagnostics);
     for input in &prepared.inputs {
         if let Some(checkpoint) = &args.checkpoint {
@@ -352,12 +332,23 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     let (model, notes) = choose_model(&prepared.scene, args.model);
     print_diagnostics(&notes);
     settings.model = model;
-    if args.spp.is_none() && model == Model::Path {
+    if prepared.is_physical() && model != Model::Path {
+        return Err(fail(&format!(
+            "`{}` has physically based materials or emitters, which only the path model renders; \
+             the {} model reads the course's materials (leave out --model, or give --model path)",
+            source.name(),
+            model.name()
+        )));
+    }
+    if args.spp.is_none() && model == Model::Path && prepared.scene.render.samples.is_none() {
         // The classic model's 16 samples for a lens are not the path tracer's default.
         settings.sampling = Sampling::Adaptive;
     }
     settings.photons = args.photons;
-    settings.max_depth = args.max_depth;
+    // Else the scene's own (a Mitsuba scene's `max_depth`), or the default.
+    if let Some(depth) = args.max_depth {
+        settings.max_depth = depth;
+    }
     (settings.passes, settings.runs) = passes_and_runs(&args, model, pass).map_err(|e| fail(&e))?;
     warn_unused_options(&args, model);
     // The photon map gets what the textures left of the memory limit.
@@ -607,7 +598,8 @@ pub fn write_whole(
             }
         }
     }
-    write_image(&Image::new(w, h, pixels), &args.output, args.gamma).map_err(|e| fail(&e.to_string()))?;
+    write_image(&Image::new(w, h, pixels), &args.output, args.gamma || prepared.scene.render.srgb_output)
+        .map_err(|e| fail(&e.to_string()))?;
     Ok(())
 }
 
@@ -652,7 +644,7 @@ fn warn_unused_options(args: &RenderArgs, model: Model) {
     if args.photons.is_some() && !model.uses_photons() {
         errln!("warning: --photons has no effect on the {name} model");
     }
-    if args.max_depth != DEFAULT_MAX_DEPTH && !model.is_physically_based() {
+    if args.max_depth.is_some() && !model.is_physically_based() {
         errln!("warning: --max-depth has no effect on the {name} model, whose depth is the course's 10");
     }
     if args.spp.is_some() && model == Model::Sppm {
@@ -823,42 +815,60 @@ fn print_diagnostics_with(diagnostics: &[Diagnostic], mut omitted: Omitted) {
     }
 }
 
+/// A course scene file parsed, its diagnostics printed.
+fn course_scene(source: &SourceFile, args: &RenderArgs) -> Result<scene::Scene, ExitCode> {
+    if !args.defines.is_empty() {
+        errln!(
+            "warning: -D applies to Mitsuba 3 scene files only; `{}` is a course scene file",
+            source.name()
+        );
+    }
+    let parsed = scene::parse(source).map_err(|e| {
+        print_diagnostics_with(&e.diagnostics, e.omitted);
+        let n = e.error_count();
+        fail(&format!("`{}` has {n} error{}; nothing was rendered", source.name(), plural(n)))
+    })?;
+    // With --size, the file's own aspect warning names a size that is not rendered: it is given
+    // again below for the size that is.
+    let file_aspect = {
+        let cam = &parsed.scene.camera;
+        args.size.and_then(|_| scene::aspect_mismatch(cam, cam.image_width, cam.image_height))
+    };
+    let diagnostics: Vec<Diagnostic> = parsed
+        .diagnostics
+        .iter()
+        .filter(|d| d.is_error() || file_aspect.as_deref() != Some(d.message.as_str()))
+        .cloned()
+        .collect();
+    print_diagnostics_with(&diagnostics, parsed.omitted);
+
+    Ok(parsed.scene)
+}
+
 /// Whether `source` is a Mitsuba 3 scene file: named `.xml`, or XML by its first character.
 fn is_mitsuba_scene(source: &SourceFile) -> bool {
     Path::new(source.name()).extension().is_some_and(|e| e.eq_ignore_ascii_case("xml"))
         || source.text().trim_start_matches('\u{feff}').trim_start().starts_with('<')
 }
 
-/// A Mitsuba 3 scene file: read and checked (includes, `$name` and `-D`, every property with its
-/// position). Rendering Mitsuba scenes is not built yet: with `--check` the file's check is the
-/// whole job; otherwise it is an error that says so, after the file's own errors if it has any.
-fn mitsuba_scene(source: SourceFile, args: &RenderArgs) -> Result<(), ExitCode> {
+/// A Mitsuba 3 scene file read (includes, `$name` and `-D`) and built into a scene, its warnings
+/// printed; errors name the file, line and column.
+fn mitsuba_scene(source: &SourceFile, args: &RenderArgs) -> Result<scene::mitsuba::Built, ExitCode> {
     let name = source.name().to_owned();
-    let doc = scene::mitsuba::read_source(source, &args.defines).map_err(|e| {
+    let doc = scene::mitsuba::read_source(source.clone(), &args.defines).map_err(|e| {
         print_diagnostics(&[e.diagnostic()]);
         fail(&format!("`{name}` is not a usable Mitsuba 3 scene file; nothing was rendered"))
     })?;
-    print_diagnostics(&doc.warnings);
-    let mut counts: Vec<(scene::mitsuba::PluginKind, usize)> = Vec::new();
-    for plugin in doc.plugins().filter(|p| p.kind != scene::mitsuba::PluginKind::Scene) {
-        match counts.iter_mut().find(|(k, _)| *k == plugin.kind) {
-            Some((_, n)) => *n += 1,
-            None => counts.push((plugin.kind, 1)),
-        }
-    }
-    counts.sort();
-    let summary = counts.iter().map(|(k, n)| format!("{n} {}", k.tag())).collect::<Vec<_>>().join(", ");
-    let v = doc.version;
-    if args.check {
-        if !args.quiet {
-            outln!("{name}: ok, a Mitsuba {}.{}.{} scene ({summary})", v.major, v.minor, v.patch);
-        }
-        return Ok(());
-    }
-    Err(fail(&format!(
-        "`{name}` is a Mitsuba 3 scene ({summary}): rayterra reads and checks Mitsuba scene files \
-         (`--check`), but does not render them yet; nothing was rendered"
-    )))
+    let built = scene::mitsuba::build(&doc).map_err(|diagnostics| {
+        print_diagnostics(&diagnostics);
+        let n = diagnostics.iter().filter(|d| d.is_error()).count();
+        fail(&format!("`{name}` has {n} error{}; nothing was rendered", plural(n)))
+    })?;
+    print_diagnostics(&built.diagnostics);
+    let mut built = built;
+    // The included files are inputs too (a part's digest covers them).
+    built.inputs.extend(doc.files.iter().skip(1).map(|f| PathBuf::from(f.name())));
+    Ok(built)
 }
 
 fn plural(n: usize) -> &'static str {

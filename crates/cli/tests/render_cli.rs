@@ -756,33 +756,60 @@ fn a_file_of_nuls_gives_a_short_report() {
     assert!(!dir.path().join("out.png").exists());
 }
 
-/// A Mitsuba 3 scene file is read and checked with its positions; it is not rendered yet, and
-/// says so instead of being parsed as a course file.
+/// A Mitsuba 3 scene file is read, built and rendered (with the path model, sRGB-encoded PNG, the
+/// same bytes at any thread count); its errors name their file, line and column.
 #[test]
-fn mitsuba_scene_files_are_checked_and_not_rendered_yet() {
+fn mitsuba_scene_files_render_and_their_errors_name_their_place() {
     let dir = tempfile::tempdir().expect("temp dir");
     std::fs::write(
         dir.path().join("scene.xml"),
-        "<scene version=\"3.0.0\">\n  <default name=\"r\" value=\"0.5\"/>\n  <include filename=\"part.xml\"/>\n</scene>\n",
+        "<scene version=\"3.0.0\">\n  <default name=\"r\" value=\"0.5\"/>\n  <sensor type=\"perspective\">\n    \
+         <float name=\"fov\" value=\"45\"/>\n    <transform name=\"to_world\"><lookat origin=\"0,0,5\" target=\"0,0,0\" up=\"0,1,0\"/></transform>\n    \
+         <sampler type=\"independent\"><integer name=\"sample_count\" value=\"4\"/></sampler>\n    \
+         <film type=\"hdrfilm\"><integer name=\"width\" value=\"24\"/><integer name=\"height\" value=\"16\"/></film>\n  </sensor>\n  \
+         <include filename=\"part.xml\"/>\n</scene>\n",
     )
     .expect("write scene");
     std::fs::write(
         dir.path().join("part.xml"),
-        "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <float name=\"radius\" value=\"$r\"/>\n  </shape>\n</scene>\n",
+        "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <float name=\"radius\" value=\"$r\"/>\n    \
+         <emitter type=\"area\"><rgb name=\"radiance\" value=\"2\"/></emitter>\n  </shape>\n  \
+         <shape type=\"rectangle\"><transform name=\"to_world\"><scale value=\"3\"/><translate z=\"-1\"/></transform></shape>\n</scene>\n",
     )
     .expect("write include");
-    let out = rayterra(&["render", "scene.xml", "--check", "-D", "r=2"], dir.path());
+    let out = rayterra(&["render", "scene.xml", "--check", "-D", "r=0.7"], dir.path());
     assert!(out.status.success(), "{}", text(&out.stderr));
-    assert!(
-        text(&out.stdout).contains("scene.xml: ok, a Mitsuba 3.0.0 scene (1 shape)"),
-        "{}",
-        text(&out.stdout)
-    );
+    assert!(text(&out.stdout).contains("24x16 pixels, path model"), "{}", text(&out.stdout));
 
-    let out = rayterra(&["render", "scene.xml", "-o", "out.png"], dir.path());
+    let out = rayterra(&["render", "scene.xml", "-o", "out.png", "-q"], dir.path());
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let png = image::open(dir.path().join("out.png")).expect("a PNG").to_rgb8();
+    assert_eq!(png.dimensions(), (24, 16));
+    // The emitter of radiance 2 seen directly is white; the lit rectangle is grey.
+    assert_eq!(png.get_pixel(12, 8).0, [255, 255, 255]);
+    assert!(png.get_pixel(1, 1).0[0] > 10, "the rectangle is lit");
+    let exr = |threads: &str, name: &str| {
+        let out = rayterra(&["render", "scene.xml", "-o", name, "-q", "--threads", threads], dir.path());
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        std::fs::read(dir.path().join(name)).expect("EXR")
+    };
+    assert_eq!(exr("1", "one.exr"), exr("2", "two.exr"), "the same bytes at any thread count");
+
+    let out = rayterra(&["render", "scene.xml", "--model", "classic", "-o", "c.png"], dir.path());
     assert_eq!(out.status.code(), Some(1));
-    assert!(text(&out.stderr).contains("does not render them yet"), "{}", text(&out.stderr));
-    assert!(!dir.path().join("out.png").exists());
+    assert!(text(&out.stderr).contains("only the path model renders"), "{}", text(&out.stderr));
+    assert!(!dir.path().join("c.png").exists());
+
+    std::fs::write(
+        dir.path().join("bare.xml"),
+        "<scene version=\"3.0.0\">\n  <shape type=\"cube\"/>\n</scene>\n",
+    )
+    .expect("write scene");
+    let out = rayterra(&["render", "bare.xml", "-o", "bare.png"], dir.path());
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("bare.xml:1:1") && stderr.contains("no <sensor>"), "{stderr}");
+    assert!(!dir.path().join("bare.png").exists());
 
     std::fs::write(dir.path().join("part.xml"), "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <float name=\"radius\" value=\"x1\"/>\n  </shape>\n</scene>\n")
         .expect("write include");

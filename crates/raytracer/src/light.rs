@@ -116,6 +116,8 @@ pub enum Emitter {
     Environment {
         /// The image file (EXR, HDR, or an 8-bit image decoded from sRGB), resolved.
         file: PathBuf,
+        /// Where the scene names it (for messages).
+        location: crate::base::diagnostic::Location,
         /// Factor on the image's values (`scale`).
         scale: f64,
         /// Rotation from the map's frame to the world (`to_world`, its linear part; the map's

@@ -11,6 +11,8 @@ use std::sync::Arc;
 
 use glam::{DAffine2, DVec3};
 
+use crate::base::diagnostic::Location;
+
 use crate::scene::texture::TextureRef;
 
 /// The course language's material. All weights are plain factors of the classic model; none is
@@ -302,6 +304,8 @@ pub enum TextureSpec {
     Bitmap {
         /// The file, resolved.
         file: PathBuf,
+        /// Where the scene names it (for messages).
+        location: Location,
         /// Whether the texels are used as stored (`raw`); otherwise 8-bit images are decoded
         /// from sRGB.
         raw: bool,

@@ -387,3 +387,113 @@ mod tests {
         }
     }
 }
+
+/// A linear-RGB image of the physically based materials and environment maps (Mitsuba's
+/// `bitmap` and `envmap`): 32-bit float texels, row 0 at the **top**, as Mitsuba stores them.
+/// 8-bit and 16-bit images are decoded from sRGB unless read raw; EXR and HDR images are linear.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bitmap {
+    width: u32,
+    height: u32,
+    texels: Vec<[f32; 3]>,
+}
+
+impl Bitmap {
+    /// Bytes a bitmap of `width` x `height` texels keeps.
+    pub fn memory_bytes(width: u32, height: u32) -> u64 {
+        u64::from(width) * u64::from(height) * 12
+    }
+
+    /// Reads an image file, its size checked from the header and its memory charged to `budget`
+    /// before it is decoded. `raw` keeps 8- and 16-bit values as stored (`value / max`).
+    pub fn load(path: &Path, raw: bool, budget: &MemoryBudget) -> Result<Bitmap, TextureError> {
+        let (decoder, info) = open_decoder(open_file(path)?, path)?;
+        let kept = Bitmap::memory_bytes(info.width, info.height);
+        let decoding = image::ImageDecoder::total_bytes(&decoder);
+        let over = |over| TextureError::OverBudget {
+            path: path.to_path_buf(),
+            width: info.width,
+            height: info.height,
+            over,
+        };
+        budget.charge(kept + decoding).map_err(over)?;
+        let decoded = image::DynamicImage::from_decoder(decoder);
+        budget.release(decoding);
+        let img = decoded.map_err(|source| {
+            budget.release(kept);
+            TextureError::Unreadable { path: path.to_path_buf(), source }
+        })?;
+        let linear = matches!(img.color(), image::ColorType::Rgb32F | image::ColorType::Rgba32F);
+        let rgb = img.into_rgb32f();
+        let decode = !linear && !raw;
+        let texels = rgb
+            .as_raw()
+            .as_chunks::<3>()
+            .0
+            .iter()
+            .map(|t| if decode { t.map(srgb_to_linear) } else { *t })
+            .collect();
+        Ok(Bitmap { width: rgb.width(), height: rgb.height(), texels })
+    }
+
+    /// A bitmap from texels given top row first, `width * height` of them.
+    pub fn from_texels(width: u32, height: u32, texels: Vec<[f32; 3]>) -> Bitmap {
+        assert_eq!(texels.len(), width as usize * height as usize, "texel count");
+        Bitmap { width, height, texels }
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The texel at column `x`, row `y` (from the top).
+    #[inline]
+    pub fn texel(&self, x: u32, y: u32) -> DVec3 {
+        let t = self.texels[y as usize * self.width as usize + x as usize];
+        DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64)
+    }
+
+    /// Mitsuba's lookup at texture coordinates `(u, v)`: `u` across from the left, `v` down from
+    /// the top, texel centres at half-integers; bilinear unless `nearest`, with `wrap` beyond
+    /// the edges.
+    #[inline]
+    pub fn lookup(&self, u: f64, v: f64, nearest: bool, wrap: crate::material::Wrap) -> DVec3 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let index = |i: i64, n: i64| -> u32 {
+            let i = match wrap {
+                crate::material::Wrap::Repeat => i.rem_euclid(n),
+                crate::material::Wrap::Clamp => i.clamp(0, n - 1),
+                crate::material::Wrap::Mirror => {
+                    let m = i.rem_euclid(2 * n);
+                    if m < n { m } else { 2 * n - 1 - m }
+                }
+            };
+            i as u32
+        };
+        let (x, y) = (u * w as f64, v * h as f64);
+        if !x.is_finite() || !y.is_finite() {
+            return DVec3::ZERO;
+        }
+        if nearest {
+            return self.texel(index(x.floor() as i64, w), index(y.floor() as i64, h));
+        }
+        let (x, y) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let t = |dx: i64, dy: i64| self.texel(index(x0 + dx, w), index(y0 + dy, h));
+        (t(0, 0) * (1.0 - fx) + t(1, 0) * fx) * (1.0 - fy) + (t(0, 1) * (1.0 - fx) + t(1, 1) * fx) * fy
+    }
+}
+
+/// The sRGB transfer function undone: an encoded value in [0, 1] to linear.
+#[inline]
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}

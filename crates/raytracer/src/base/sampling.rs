@@ -129,6 +129,16 @@ impl Discrete {
         let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
         Some((i, self.pmf(i)))
     }
+
+    /// As [`Discrete::sample`], with `u` rescaled to [0, 1) within the chosen index's share, so
+    /// that it can choose again (a continuous position inside the index's cell).
+    #[inline]
+    pub fn sample_remapped(&self, u: f64) -> Option<(usize, f64, f64)> {
+        let (i, p) = self.sample(u)?;
+        let start = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let rest = if p > 0.0 { ((u - start) / p).clamp(0.0, 1.0 - f64::EPSILON / 2.0) } else { 0.5 };
+        Some((i, p, rest))
+    }
 }
 
 #[cfg(test)]

@@ -450,6 +450,18 @@ impl TriangleMesh {
         ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
     }
 
+    /// The direction in which the file's first texture coordinate (`s`, Mitsuba's `u`) grows on
+    /// triangle `index`, `dp/ds`; `None` without texture coordinates or where they are
+    /// degenerate.
+    pub fn dp_ds(&self, index: u32) -> Option<DVec3> {
+        let uv = self.uv_corners(index)?;
+        let [p0, p1, p2] = self.corners(index);
+        let (ds1, dt1) = ((uv[1][0] - uv[0][0]) as f64, (uv[1][1] - uv[0][1]) as f64);
+        let (ds2, dt2) = ((uv[2][0] - uv[0][0]) as f64, (uv[2][1] - uv[0][1]) as f64);
+        let det = ds1 * dt2 - ds2 * dt1;
+        (det.abs() > 1e-20).then(|| ((p1 - p0) * dt2 - (p2 - p0) * dt1) / det)
+    }
+
     fn uv_corners(&self, index: u32) -> Option<[[f32; 2]; 3]> {
         let uv = &self.vertices.uvs;
         if uv.is_empty() {

@@ -18,10 +18,12 @@ pub mod bsdf;
 pub mod bsdfs;
 pub mod classic;
 pub mod course_lobes;
+pub mod emitters;
 pub mod lights;
 pub mod path;
 pub mod photon;
 pub mod photon_map;
+pub mod physical;
 pub mod report;
 pub mod sppm;
 
@@ -78,7 +80,10 @@ pub fn choose_model(scene: &Scene, requested: Option<Model>) -> (Model, Vec<Diag
         Algorithm::PhotonMapping => Model::Photon,
         Algorithm::ProgressivePhotonMapping | Algorithm::StochasticProgressivePhotonMapping => Model::Sppm,
     });
-    let model = requested.or(from_file).unwrap_or(Model::Classic);
+    let physical =
+        !scene.emitters.is_empty() || scene.primitives.iter().any(|p| p.material.as_course().is_none());
+    let default = if physical { Model::Path } else { Model::Classic };
+    let model = requested.or(from_file).unwrap_or(default);
     if requested.is_none()
         && from_file.is_none()
         && let Some((key, location)) = scene.camera.photons.keys.first()

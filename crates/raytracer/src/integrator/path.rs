@@ -21,7 +21,9 @@ use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrator::bsdf::{Bsdf, Transport, class, power_heuristic};
 use crate::integrator::lights::Lights;
+use crate::integrator::physical::PhysicalTracer;
 use crate::prepare::{Hit, Interaction, PreparedScene};
+use crate::scene::PixelFilter;
 
 /// The path depth (segments) from which Russian roulette may end a path.
 pub const RR_DEPTH: u32 = 5;
@@ -48,14 +50,7 @@ impl Vertex {
     pub const CONTINUE: Vertex = Vertex { lobes: class::ALL, scale: 1.0, stop: false };
 }
 
-/// What a camera path met.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PathResult {
-    /// Radiance gathered along the path.
-    pub radiance: DVec3,
-    /// Rays traced (path segments and shadow rays).
-    pub rays: u64,
-}
+pub use crate::integrator::report::PathResult;
 
 /// Walks the camera path that starts with `ray`, drawing from `rng`, and returns the radiance it
 /// gathers. At each surface vertex, `visit(bsdf, at, depth, beta, wo, rng)` chooses what happens
@@ -164,6 +159,71 @@ impl<'s> PathTracer<'s> {
     }
 }
 
+/// The path tracer a scene needs: the course's materials and lights, or the physically based
+/// ones of Mitsuba scenes.
+enum Tracer<'s> {
+    Course(PathTracer<'s>),
+    Physical(PhysicalTracer<'s>),
+}
+
+impl<'s> Tracer<'s> {
+    fn new(scene: &'s PreparedScene, max_depth: u32) -> Tracer<'s> {
+        if scene.is_physical() {
+            Tracer::Physical(PhysicalTracer::new(scene, max_depth))
+        } else {
+            Tracer::Course(PathTracer::new(scene, max_depth))
+        }
+    }
+
+    #[inline]
+    fn radiance(&self, ray: Ray, rng: &mut PixelRng) -> PathResult {
+        match self {
+            Tracer::Course(t) => t.radiance(ray, rng),
+            Tracer::Physical(t) => t.radiance(ray, rng),
+        }
+    }
+}
+
+/// Where in its pixel a sample goes, `(0, 0)` the pixel's top-left corner: drawn from the
+/// reconstruction filter's own density around the pixel's centre (filter importance sampling),
+/// so every sample weighs 1 and the pixel's mean converges to the filtered image Mitsuba's
+/// weighted splatting converges to. The box filter draws exactly as the course's sampler did.
+#[inline]
+pub fn filter_offset(filter: PixelFilter, rng: &mut PixelRng) -> (f64, f64) {
+    match filter {
+        PixelFilter::Box => (rng.uniform(), rng.uniform()),
+        PixelFilter::Tent { radius } => {
+            let tent = |u: f64| {
+                if u < 0.5 {
+                    radius * ((2.0 * u).sqrt() - 1.0)
+                } else {
+                    radius * (1.0 - (2.0 - 2.0 * u).sqrt())
+                }
+            };
+            (0.5 + tent(rng.uniform()), 0.5 + tent(rng.uniform()))
+        }
+        PixelFilter::Gaussian { stddev } => {
+            // Mitsuba's filter is `g(x) - g(R)` on [-R, R], R = 4 stddev, per axis: Gaussian pairs
+            // (Box-Muller), kept with probability (g(x) - g(R)) (g(y) - g(R)) / (g(x) g(y)).
+            let radius = 4.0 * stddev;
+            let g = |x: f64| (-x * x / (2.0 * stddev * stddev)).exp();
+            let floor = g(radius);
+            loop {
+                let (u1, u2, keep) = (rng.uniform(), rng.uniform(), rng.uniform());
+                let r = stddev * (-2.0 * (1.0 - u1).ln()).sqrt();
+                let (s, c) = (std::f64::consts::TAU * u2).sin_cos();
+                let (x, y) = (r * c, r * s);
+                if x.abs() < radius
+                    && y.abs() < radius
+                    && keep * g(x) * g(y) < (g(x) - floor) * (g(y) - floor)
+                {
+                    return (0.5 + x, 0.5 + y);
+                }
+            }
+        }
+    }
+}
+
 /// The exact sums of the path tracer's samples `samples` (sample indices) of every pixel of
 /// `rows` (in the order of [`Rows::ys`]) seen through `camera`, and the rays traced: the path
 /// model's row loop. Sample `s` of pixel `(x, y)` draws from its own stream (`seed`, pixel, `s`),
@@ -179,7 +239,8 @@ pub fn render_sums(
     samples: Range<u64>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Vec<ExactSum>, u64) {
-    let tracer = PathTracer::new(scene, max_depth);
+    let tracer = Tracer::new(scene, max_depth);
+    let filter = scene.scene.render.filter;
     let width = rows.width() as usize;
     let ys: Vec<u32> = rows.ys().collect();
     let mut sums = vec![ExactSum::default(); rows.len()];
@@ -194,7 +255,7 @@ pub fn render_sums(
                 let x = x as u32;
                 for s in samples.clone() {
                     let mut rng = PixelRng::for_sample(seed, stream::PATH, x, y, s);
-                    let (dx, dy) = (rng.uniform(), rng.uniform());
+                    let (dx, dy) = filter_offset(filter, &mut rng);
                     let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
                     let result = tracer.radiance(camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
                     sum.add(result.radiance);

@@ -3,6 +3,8 @@
 
 use std::time::Duration;
 
+use glam::DVec3;
+
 /// The stage a progress report is about.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
@@ -134,4 +136,13 @@ impl SppmStats {
             mean_radius: (self.mean_radius + other.mean_radius) / 2.0,
         }
     }
+}
+
+/// What a camera path met.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PathResult {
+    /// Radiance gathered along the path.
+    pub radiance: DVec3,
+    /// Rays traced (path segments and shadow rays).
+    pub rays: u64,
 }

@@ -37,7 +37,7 @@ pub struct Interaction {
     /// single-precision meshes).
     pub magnitude: f64,
     /// The part of the shape that was hit (for its texture coordinates).
-    part: ShapePart,
+    pub(super) part: ShapePart,
 }
 
 impl Interaction {

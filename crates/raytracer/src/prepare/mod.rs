@@ -7,11 +7,14 @@
 
 mod interaction;
 mod load;
+mod physical;
 mod queries;
 mod search;
 
 pub use interaction::Interaction;
 use load::{load_meshes, load_textures};
+pub use physical::{EnvironmentMap, luminance};
+use physical::{Physical, load_physical};
 use queries::FlatSet;
 pub use search::{Located, TextureSearch};
 
@@ -80,6 +83,8 @@ pub struct PreparedScene {
     linear: FlatSet,
     /// Lights with a visible shape: (light index, shape).
     emitters: Vec<(u32, Shape)>,
+    /// The bitmaps, environment map and emitting primitives of physically based scenes.
+    physical: Physical,
 }
 
 /// What a mesh's triangles and vertices take, for a report.
@@ -113,6 +118,7 @@ impl PreparedScene {
         let mut errors = Vec::new();
         let mut inputs = Vec::new();
         load_meshes(&mut scene, search, &mut inputs, &mut diagnostics, &mut errors);
+        let (physical, physical_memory) = load_physical(&scene, budget, &mut inputs, &mut errors);
 
         // Distinct texture sources (colour textures and normal maps), each loaded once, in
         // parallel.
@@ -137,15 +143,17 @@ impl PreparedScene {
         let (textures, notes, memory_used) = match load_textures(&sources, search, budget) {
             Ok(loaded) if errors.is_empty() => loaded,
             Ok((_, _, kept)) => {
-                budget.release(kept);
+                budget.release(kept + physical_memory);
                 return Err(errors);
             }
             Err(texture_errors) => {
+                budget.release(physical_memory);
                 errors.extend(texture_errors);
                 return Err(errors);
             }
         };
         diagnostics.extend(notes);
+        let memory_used = memory_used + physical_memory;
         inputs.extend(sources.iter().filter_map(|t| match &t.source {
             TextureSource::File(name) => search.resolve(name).ok(),
             TextureSource::Builtin(_) => None,
@@ -183,6 +191,7 @@ impl PreparedScene {
             bvh,
             linear,
             emitters,
+            physical,
             textures,
             texture_of,
             diagnostics,

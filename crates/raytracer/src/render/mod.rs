@@ -91,19 +91,27 @@ impl RenderSettings {
 
     /// The scene file's image size with adaptive sampling (uniform 16 samples when the camera
     /// has a lens: defocus blur needs samples everywhere, not only on edges), and the model its
-    /// `algorithm=` names (see [`crate::integrator::choose_model`]).
+    /// `algorithm=` names (see [`crate::integrator::choose_model`]); for a scene that states its
+    /// render settings (a Mitsuba scene's sampler and integrator), its samples and depth (an
+    /// unbounded depth is [`MAX_DEPTH_LIMIT`]).
     pub fn for_scene(scene: &PreparedScene) -> RenderSettings {
         let cam = &scene.scene.camera;
+        let stated = &scene.scene.render;
+        let sampling = match stated.samples {
+            Some(n) => Sampling::Uniform(n),
+            None if cam.aperture > 0.0 => Sampling::Uniform(16),
+            None => Sampling::Adaptive,
+        };
         RenderSettings {
             width: cam.image_width,
             height: cam.image_height,
-            sampling: if cam.aperture > 0.0 { Sampling::Uniform(16) } else { Sampling::Adaptive },
+            sampling,
             threads: None,
             seed: 0,
             model: crate::integrator::choose_model(&scene.scene, None).0,
             photons: None,
             memory_limit: DEFAULT_MEMORY_LIMIT,
-            max_depth: DEFAULT_MAX_DEPTH,
+            max_depth: stated.max_depth.map_or(DEFAULT_MAX_DEPTH, |d| d.min(MAX_DEPTH_LIMIT)),
             passes: None,
             runs: 1,
         }

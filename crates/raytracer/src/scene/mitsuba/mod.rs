@@ -45,7 +45,7 @@ mod numbers;
 mod params;
 mod reader;
 mod spectrum;
-mod transform;
+pub mod transform;
 mod tree;
 pub mod upgrade;
 

@@ -76,7 +76,12 @@ impl<'a> Builder<'a> {
                 );
                 props.ignore("filter_type");
                 props.ignore("mis_compensation");
-                Emitter::Environment { file, scale: props.float("scale", 1.0)?, to_world: rotation }
+                Emitter::Environment {
+                    file,
+                    location: self.doc.location(pos),
+                    scale: props.float("scale", 1.0)?,
+                    to_world: rotation,
+                }
             }
             "area" => return Err(props.error("an `area` emitter belongs inside a <shape>")),
             _ => {

@@ -219,12 +219,16 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    /// The material of a shape: its nested or referenced BSDF, or Mitsuba's default (diffuse,
-    /// reflectance 0.5).
+    /// The material of a shape: its nested or referenced BSDF, or Mitsuba's default: diffuse of
+    /// reflectance 0.5, or 0 (black) for a shape that emits.
     fn shape_material(&mut self, props: &Props<'a>) -> Result<Arc<Material>, Diagnostic> {
         match props.children(PluginKind::Bsdf).first() {
             Some((_, bsdf)) => self.material(bsdf),
-            None => Ok(Arc::new(Material::Diffuse { reflectance: Param::scalar(0.5) })),
+            None => {
+                let emits = !props.children(PluginKind::Emitter).is_empty();
+                let reflectance = if emits { 0.0 } else { 0.5 };
+                Ok(Arc::new(Material::Diffuse { reflectance: Param::scalar(reflectance) }))
+            }
         }
     }
 

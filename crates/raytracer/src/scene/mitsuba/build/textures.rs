@@ -60,6 +60,7 @@ impl<'a> Builder<'a> {
         props.ignore("format");
         Ok(TextureSpec::Bitmap {
             file,
+            location: self.doc.location(pos),
             raw: props.boolean("raw", false)?,
             nearest,
             wrap,

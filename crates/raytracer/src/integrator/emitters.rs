@@ -1,0 +1,394 @@
+//! The physically based emitters (Mitsuba's) as the path tracer samples them: what each emits,
+//! next-event estimation (an emitter chosen in proportion to an estimate of its power, then a
+//! point or direction on it) and the densities multiple importance sampling needs.
+//!
+//! - `area` on a triangle mesh: a triangle chosen by area, a point uniform on it; radiance leaves
+//!   the front face only (the side of `(p1 - p0) x (p2 - p0)`);
+//! - `area` on a sphere: a direction uniform in the cone the sphere fills (outside it), radiance
+//!   leaving outwards;
+//! - `point`, `spot` (Mitsuba's fall-off, linear in angle between `beam_width` and
+//!   `cutoff_angle`) and `directional`: delta lights;
+//! - `constant` and `envmap`: the environment, the map sampled texel by texel in proportion to
+//!   luminance times `sin theta` (the texel's solid angle), then uniformly inside the texel.
+//!
+//! Densities are per unit solid angle at the receiving point, the emitter's choice included.
+
+use std::f64::consts::{PI, TAU};
+use std::sync::Arc;
+
+use glam::DVec3;
+
+use crate::base::sampling::{Discrete, uniform_cone, uniform_cone_pdf};
+use crate::geometry::{Bounds, MESH_ERROR_SCALE, Ray, SPAWN_OFFSET, Shape, TriangleMesh};
+use crate::light::Emitter;
+use crate::prepare::{EnvironmentMap, PreparedScene, luminance};
+
+/// What next-event estimation drew: a direction to an emitter and what arrives along it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterSample {
+    /// Unit direction from the receiving point towards the emitter.
+    pub wi: DVec3,
+    /// The point on the emitter (for the shadow ray); far away for the environment and a
+    /// directional emitter.
+    pub target: DVec3,
+    /// Incident radiance along `wi` (for delta emitters, the irradiance on a surface facing
+    /// the light), not divided by the density.
+    pub radiance: DVec3,
+    /// Density of the direction per steradian, the choice included; for a delta emitter, the
+    /// probability of choosing it.
+    pub pdf: f64,
+    /// Whether the emitter is a delta distribution (BSDF sampling cannot hit it).
+    pub delta: bool,
+    /// How far short of `target` the shadow ray stops: the rounding error of the emitter's
+    /// surface there (0 for points and far targets).
+    pub margin: f64,
+}
+
+/// How an area emitter's shape is sampled.
+#[derive(Debug)]
+enum AreaShape {
+    /// A mesh: triangles by area.
+    Mesh { mesh: Arc<TriangleMesh>, triangles: Discrete, area: f64 },
+    /// A sphere: the cone of directions it fills.
+    Sphere { centre: DVec3, radius: f64 },
+}
+
+/// The environment map's sampling distribution: rows by their weight, then texels in the row.
+#[derive(Debug)]
+struct MapDistribution {
+    rows: Discrete,
+    columns: Vec<Discrete>,
+}
+
+/// The scene's physically based emitters, ready to sample.
+#[derive(Debug)]
+pub struct Emitters<'s> {
+    scene: &'s PreparedScene,
+    /// Emitters by estimated power.
+    choose: Discrete,
+    /// Per emitter: the shape of an area emitter.
+    shapes: Vec<Option<AreaShape>>,
+    /// The environment emitter (`constant` or `envmap`), if any.
+    environment: Option<u32>,
+    /// The environment map and its distribution.
+    map: Option<(Arc<EnvironmentMap>, MapDistribution)>,
+    /// Radius of a sphere around the scene (for far points and power estimates).
+    radius: f64,
+}
+
+/// Mean of the channels.
+#[inline]
+fn mean(c: DVec3) -> f64 {
+    (c.x + c.y + c.z) / 3.0
+}
+
+impl<'s> Emitters<'s> {
+    /// The emitters of `scene`.
+    pub fn new(scene: &'s PreparedScene) -> Emitters<'s> {
+        let s = &scene.scene;
+        let mut b = Bounds::EMPTY.include(s.camera.eye);
+        for p in &s.primitives {
+            if let Some(pb) = p.shape.bounds() {
+                b = b.union(pb);
+            }
+        }
+        let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
+        let disc = PI * radius * radius;
+        let mut environment = None;
+        let mut map = None;
+        let mut shapes = Vec::with_capacity(s.emitters.len());
+        let mut powers = Vec::with_capacity(s.emitters.len());
+        for (i, e) in s.emitters.iter().enumerate() {
+            let (shape, power) = match e {
+                Emitter::Area { primitive, radiance } => match &s.primitives[*primitive as usize].shape {
+                    Shape::Mesh(mesh) => {
+                        let areas: Vec<f64> = (0..mesh.len() as u32)
+                            .map(|t| {
+                                let [p0, p1, p2] = mesh.corners(t);
+                                0.5 * (p1 - p0).cross(p2 - p0).length()
+                            })
+                            .collect();
+                        let area: f64 = areas.iter().sum();
+                        let shape =
+                            AreaShape::Mesh { mesh: mesh.clone(), triangles: Discrete::new(&areas), area };
+                        (Some(shape), mean(*radiance) * PI * area)
+                    }
+                    Shape::Sphere(sp) => (
+                        Some(AreaShape::Sphere { centre: sp.centre, radius: sp.radius }),
+                        mean(*radiance) * 4.0 * PI * PI * sp.radius * sp.radius,
+                    ),
+                    _ => (None, 0.0),
+                },
+                Emitter::Point { intensity, .. } => (None, 4.0 * PI * mean(*intensity)),
+                Emitter::Spot { intensity, cos_cutoff, cos_beam, .. } => {
+                    (None, TAU * (1.0 - 0.5 * (cos_cutoff + cos_beam)) * mean(*intensity))
+                }
+                Emitter::Directional { irradiance, .. } => (None, disc * mean(*irradiance)),
+                Emitter::Constant { radiance } => {
+                    environment = Some(i as u32);
+                    (None, disc * 4.0 * PI * mean(*radiance))
+                }
+                Emitter::Environment { .. } => {
+                    environment = Some(i as u32);
+                    let power = match scene.environment_map() {
+                        Some(m) => {
+                            let d = MapDistribution::new(m);
+                            let (w, h) = (m.image.width() as f64, m.image.height() as f64);
+                            let power = disc * d.rows.total() * m.scale * 2.0 * PI * PI / (w * h);
+                            map = Some((m.clone(), d));
+                            power
+                        }
+                        None => 0.0,
+                    };
+                    (None, power)
+                }
+            };
+            shapes.push(shape);
+            powers.push(power);
+        }
+        Emitters { scene, choose: Discrete::new(&powers), shapes, environment, map, radius }
+    }
+
+    /// Whether there is anything to sample.
+    pub fn any(&self) -> bool {
+        !self.choose.is_empty()
+    }
+
+    /// The radiance arriving along a ray of unit direction `dir` that escapes the scene.
+    #[inline]
+    pub fn environment(&self, dir: DVec3) -> DVec3 {
+        match self.environment.map(|i| &self.scene.scene.emitters[i as usize]) {
+            Some(Emitter::Constant { radiance }) => *radiance,
+            Some(Emitter::Environment { .. }) => {
+                self.map.as_ref().map_or(DVec3::ZERO, |(m, _)| m.radiance(dir))
+            }
+            _ => DVec3::ZERO,
+        }
+    }
+
+    /// The density with which [`Emitters::sample`] draws the escaping direction `dir`.
+    pub fn environment_pdf(&self, dir: DVec3) -> f64 {
+        let Some(i) = self.environment else { return 0.0 };
+        let p = self.choose.pmf(i as usize);
+        match &self.map {
+            Some((m, d)) => p * d.pdf(m, dir),
+            None => p / (4.0 * PI),
+        }
+    }
+
+    /// The radiance area emitter `emitter` sends along a ray that meets its front (`front`) or
+    /// back face.
+    #[inline]
+    pub fn emitted(&self, emitter: u32, front: bool) -> DVec3 {
+        match &self.scene.scene.emitters[emitter as usize] {
+            Emitter::Area { radiance, .. } if front => *radiance,
+            _ => DVec3::ZERO,
+        }
+    }
+
+    /// The density with which [`Emitters::sample`] at `p` draws the direction `dir` that meets
+    /// area emitter `emitter` at distance `t` where its geometric normal is `normal`.
+    pub fn area_pdf(&self, emitter: u32, p: DVec3, dir: DVec3, t: f64, normal: DVec3) -> f64 {
+        let choice = self.choose.pmf(emitter as usize);
+        match self.shapes.get(emitter as usize) {
+            Some(Some(AreaShape::Mesh { area, .. })) => {
+                let cos = normal.dot(dir).abs();
+                if cos <= 1e-12 || *area <= 0.0 { 0.0 } else { choice * t * t / (area * cos) }
+            }
+            Some(Some(AreaShape::Sphere { centre, radius })) => {
+                let d2 = (*centre - p).length_squared();
+                let r2 = radius * radius;
+                if d2 <= r2 { 0.0 } else { choice * uniform_cone_pdf((1.0 - r2 / d2).max(0.0).sqrt()) }
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// An emitter sample for the point `p`: `u` chooses the emitter, `u1`, `u2` the point or
+    /// direction on it. `None` when nothing emits towards `p`.
+    pub fn sample(&self, p: DVec3, u: f64, u1: f64, u2: f64) -> Option<EmitterSample> {
+        let (index, choice) = self.choose.sample(u)?;
+        let far = 2.0 * self.radius + (p - self.scene.scene.camera.eye).length();
+        match &self.scene.scene.emitters[index] {
+            Emitter::Area { radiance, .. } => match self.shapes[index].as_ref()? {
+                AreaShape::Mesh { mesh, triangles, area } => {
+                    let (t, _, u1) = triangles.sample_remapped(u1)?;
+                    let s = u1.sqrt();
+                    let (b1, b2) = (1.0 - s, u2 * s);
+                    let target = mesh.point_at(t as u32, b1 as f32, b2 as f32);
+                    let n = mesh.face_normal(t as u32);
+                    let to = target - p;
+                    let d2 = to.length_squared();
+                    let wi = to / d2.sqrt();
+                    // One-sided: only the front face emits.
+                    let cos = -n.dot(wi);
+                    if cos <= 1e-12 || d2 <= 0.0 {
+                        return None;
+                    }
+                    let margin =
+                        SPAWN_OFFSET * MESH_ERROR_SCALE * mesh.magnitude().max(target.abs().max_element());
+                    Some(EmitterSample {
+                        wi,
+                        target,
+                        radiance: *radiance,
+                        pdf: choice * d2 / (area * cos),
+                        delta: false,
+                        margin,
+                    })
+                }
+                AreaShape::Sphere { centre, radius: r } => {
+                    let axis = *centre - p;
+                    let d2 = axis.length_squared();
+                    let r2 = r * r;
+                    if d2 <= r2 {
+                        return None;
+                    }
+                    let d = d2.sqrt();
+                    let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
+                    let wi = uniform_cone(axis / d, cos_max, u1, u2);
+                    let b = -axis.dot(wi);
+                    let t = -b - (b * b - (d2 - r2)).max(0.0).sqrt();
+                    Some(EmitterSample {
+                        wi,
+                        target: p + wi * t,
+                        radiance: *radiance,
+                        pdf: choice * uniform_cone_pdf(cos_max),
+                        delta: false,
+                        margin: SPAWN_OFFSET
+                            * (centre.abs().max_element() + r).max((p + wi * t).abs().max_element()),
+                    })
+                }
+            },
+            Emitter::Point { position, intensity } => {
+                let to = *position - p;
+                let d2 = to.length_squared();
+                (d2 > 0.0).then(|| EmitterSample {
+                    wi: to / d2.sqrt(),
+                    target: *position,
+                    radiance: *intensity / d2,
+                    pdf: choice,
+                    delta: true,
+                    margin: 0.0,
+                })
+            }
+            Emitter::Spot { position, axis, intensity, cos_beam, cos_cutoff } => {
+                let to = *position - p;
+                let d2 = to.length_squared();
+                if d2 <= 0.0 {
+                    return None;
+                }
+                let wi = to / d2.sqrt();
+                let cos = -wi.dot(*axis);
+                if cos <= *cos_cutoff {
+                    return None;
+                }
+                let falloff = if cos >= *cos_beam {
+                    1.0
+                } else {
+                    let (cutoff, beam) = (cos_cutoff.acos(), cos_beam.acos());
+                    ((cutoff - cos.clamp(-1.0, 1.0).acos()) / (cutoff - beam)).clamp(0.0, 1.0)
+                };
+                Some(EmitterSample {
+                    wi,
+                    target: *position,
+                    radiance: *intensity * (falloff / d2),
+                    pdf: choice,
+                    delta: true,
+                    margin: 0.0,
+                })
+            }
+            Emitter::Directional { direction, irradiance } => {
+                let wi = -*direction;
+                Some(EmitterSample {
+                    wi,
+                    target: p + wi * far,
+                    radiance: *irradiance,
+                    pdf: choice,
+                    delta: true,
+                    margin: 0.0,
+                })
+            }
+            Emitter::Constant { radiance } => {
+                let wi = crate::base::sampling::uniform_sphere(u1, u2);
+                Some(EmitterSample {
+                    wi,
+                    target: p + wi * far,
+                    radiance: *radiance,
+                    pdf: choice / (4.0 * PI),
+                    delta: false,
+                    margin: 0.0,
+                })
+            }
+            Emitter::Environment { .. } => {
+                let (m, d) = self.map.as_ref()?;
+                let (wi, pdf) = d.sample(m, u1, u2)?;
+                Some(EmitterSample {
+                    wi,
+                    target: p + wi * far,
+                    radiance: m.radiance(wi),
+                    pdf: choice * pdf,
+                    delta: false,
+                    margin: 0.0,
+                })
+            }
+        }
+    }
+
+    /// Whether nothing blocks the segment from `origin` to the sample's target, stopping the
+    /// sample's margin short of it (so that the emitter's own surface does not). Counts the ray
+    /// in `rays`.
+    pub fn unoccluded(&self, origin: DVec3, sample: &EmitterSample, rays: &mut u64) -> bool {
+        *rays += 1;
+        let to = sample.target - origin;
+        let dist = to.length();
+        if dist.is_nan() || dist <= 0.0 {
+            return true;
+        }
+        let t_max = (dist - sample.margin).min(dist * (1.0 - 1e-7));
+        !self.scene.occluded(&Ray { origin, dir: to / dist }, t_max)
+    }
+}
+
+impl MapDistribution {
+    /// Texels weighted by luminance times `sin theta` at their centre.
+    fn new(map: &EnvironmentMap) -> MapDistribution {
+        let (w, h) = (map.image.width(), map.image.height());
+        let columns: Vec<Discrete> = (0..h)
+            .map(|y| {
+                let sin = (PI * (y as f64 + 0.5) / h as f64).sin();
+                let weights: Vec<f64> =
+                    (0..w).map(|x| luminance(map.image.texel(x, y)).max(0.0) * sin).collect();
+                Discrete::new(&weights)
+            })
+            .collect();
+        let rows = Discrete::new(&columns.iter().map(Discrete::total).collect::<Vec<_>>());
+        MapDistribution { rows, columns }
+    }
+
+    /// A direction and its density per steradian.
+    fn sample(&self, map: &EnvironmentMap, u1: f64, u2: f64) -> Option<(DVec3, f64)> {
+        let (w, h) = (map.image.width() as f64, map.image.height() as f64);
+        let (row, p_row, v_in) = self.rows.sample_remapped(u2)?;
+        let (column, p_column, u_in) = self.columns[row].sample_remapped(u1)?;
+        let (u, v) = ((column as f64 + u_in) / w, (row as f64 + v_in) / h);
+        let (dir, sin) = map.direction(u, v);
+        if sin <= 0.0 {
+            return None;
+        }
+        Some((dir, p_row * p_column * w * h / (2.0 * PI * PI * sin)))
+    }
+
+    /// The density of [`MapDistribution::sample`] for `dir`.
+    fn pdf(&self, map: &EnvironmentMap, dir: DVec3) -> f64 {
+        let (w, h) = (map.image.width(), map.image.height());
+        let (u, v) = map.uv(dir);
+        let column = ((u * w as f64) as u32).min(w - 1) as usize;
+        let row = ((v * h as f64) as u32).min(h - 1) as usize;
+        let local_y = (map.to_local * dir).y.clamp(-1.0, 1.0);
+        let sin = (1.0 - local_y * local_y).sqrt();
+        if sin <= 0.0 {
+            return 0.0;
+        }
+        self.rows.pmf(row) * self.columns[row].pmf(column) * (w as f64 * h as f64) / (2.0 * PI * PI * sin)
+    }
+}

@@ -1,0 +1,270 @@
+//! What the physically based materials and emitters (Mitsuba scenes) need once a scene is
+//! prepared: the bitmaps of textured parameters and the environment map read within the memory
+//! budget, which primitive emits, and the lookups of parameters at a surface point.
+
+use std::collections::HashMap;
+use std::f64::consts::{PI, TAU};
+use std::sync::Arc;
+
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+
+use super::{Interaction, PreparedScene};
+use crate::base::memory::MemoryBudget;
+use crate::geometry::{Shape, ShapePart};
+use crate::light::Emitter;
+use crate::material::{Material, Param, TextureSpec};
+use crate::scene::mitsuba::transform::coordinate_system;
+use crate::scene::{Diagnostic, Location, Scene, Severity};
+use crate::texture::{Bitmap, TextureError};
+
+/// No emitter.
+const NO_EMITTER: u32 = u32::MAX;
+
+/// An environment map ready for lookups (Mitsuba's `envmap`): latitude-longitude, the map's `+y`
+/// up; the direction `d` in the map's frame is at `u = atan2(d.x, -d.z) / 2 pi` (wrapped to
+/// [0, 1)), `v = acos(d.y) / pi`.
+#[derive(Debug)]
+pub struct EnvironmentMap {
+    /// The image, linear RGB.
+    pub image: Bitmap,
+    /// Factor on its values.
+    pub scale: f64,
+    /// The map's frame to the world.
+    pub to_world: DMat3,
+    /// The world to the map's frame.
+    pub to_local: DMat3,
+}
+
+impl EnvironmentMap {
+    /// Texture coordinates of the world direction `dir` (unit).
+    #[inline]
+    pub fn uv(&self, dir: DVec3) -> (f64, f64) {
+        let d = self.to_local * dir;
+        let u = d.x.atan2(-d.z) / TAU;
+        (u - u.floor(), d.y.clamp(-1.0, 1.0).acos() / PI)
+    }
+
+    /// The world direction at texture coordinates `(u, v)`, and `sin theta` there.
+    #[inline]
+    pub fn direction(&self, u: f64, v: f64) -> (DVec3, f64) {
+        let (sin_t, cos_t) = (PI * v).sin_cos();
+        let (sin_p, cos_p) = (TAU * u).sin_cos();
+        (self.to_world * DVec3::new(sin_t * sin_p, cos_t, -sin_t * cos_p), sin_t)
+    }
+
+    /// The radiance arriving from direction `dir` (bilinear in the image, wrapping around in
+    /// `u`).
+    #[inline]
+    pub fn radiance(&self, dir: DVec3) -> DVec3 {
+        let (u, v) = self.uv(dir);
+        self.image.lookup(u, v, false, crate::material::Wrap::Repeat) * self.scale
+    }
+}
+
+/// The physically based part of a prepared scene.
+#[derive(Debug, Default)]
+pub(super) struct Physical {
+    /// Bitmaps of textured parameters, by the address of their [`TextureSpec`].
+    bitmaps: HashMap<usize, Bitmap>,
+    /// The environment map, if the scene has one.
+    pub(super) environment: Option<Arc<EnvironmentMap>>,
+    /// For each primitive, the index of its area emitter in `scene.emitters`.
+    emitter_of: Vec<u32>,
+}
+
+/// The bitmaps the materials name, each once.
+fn bitmap_specs(scene: &Scene) -> Vec<&Arc<TextureSpec>> {
+    let mut seen = HashMap::new();
+    let mut out = Vec::new();
+    for p in &scene.primitives {
+        if matches!(*p.material, Material::Course(_)) {
+            continue;
+        }
+        for param in p.material.params() {
+            if let Param::Texture(t) = param
+                && matches!(**t, TextureSpec::Bitmap { .. })
+                && seen.insert(Arc::as_ptr(t) as usize, ()).is_none()
+            {
+                out.push(t);
+            }
+        }
+    }
+    out
+}
+
+fn bitmap_error(location: &Location, e: TextureError) -> Diagnostic {
+    Diagnostic {
+        severity: Severity::Error,
+        message: e.to_string(),
+        location: Some(location.clone()),
+        notes: Vec::new(),
+    }
+}
+
+/// Reads the bitmaps and the environment map (in parallel, each charged to `budget` before it is
+/// decoded) and finds the emitting primitives. Unreadable images are errors at the line that
+/// names them.
+pub(super) fn load_physical(
+    scene: &Scene,
+    budget: &MemoryBudget,
+    inputs: &mut Vec<std::path::PathBuf>,
+    errors: &mut Vec<Diagnostic>,
+) -> (Physical, u64) {
+    let mut physical =
+        Physical { emitter_of: vec![NO_EMITTER; scene.primitives.len()], ..Physical::default() };
+    for (i, e) in scene.emitters.iter().enumerate() {
+        if let Emitter::Area { primitive, .. } = e
+            && let Some(slot) = physical.emitter_of.get_mut(*primitive as usize)
+        {
+            *slot = i as u32;
+        }
+    }
+    let specs = bitmap_specs(scene);
+    let before = budget.used();
+    let loaded: Vec<Result<(usize, Bitmap), Diagnostic>> = specs
+        .par_iter()
+        .filter_map(|t| match &***t {
+            TextureSpec::Bitmap { file, location, raw, .. } => Some(
+                Bitmap::load(file, *raw, budget)
+                    .map(|b| (Arc::as_ptr(t) as usize, b))
+                    .map_err(|e| bitmap_error(location, e)),
+            ),
+            TextureSpec::Checkerboard { .. } => None,
+        })
+        .collect();
+    for t in &specs {
+        if let TextureSpec::Bitmap { file, .. } = &***t {
+            inputs.push(file.clone());
+        }
+    }
+    for result in loaded {
+        match result {
+            Ok((key, bitmap)) => {
+                physical.bitmaps.insert(key, bitmap);
+            }
+            Err(d) => errors.push(d),
+        }
+    }
+    for e in &scene.emitters {
+        if let Emitter::Environment { file, location, scale, to_world } = e {
+            inputs.push(file.clone());
+            match Bitmap::load(file, false, budget) {
+                Ok(image) => {
+                    physical.environment = Some(Arc::new(EnvironmentMap {
+                        image,
+                        scale: *scale,
+                        to_world: *to_world,
+                        to_local: to_world.transpose(),
+                    }))
+                }
+                Err(err) => errors.push(bitmap_error(location, err)),
+            }
+        }
+    }
+    let used = budget.used().saturating_sub(before);
+    (physical, used)
+}
+
+impl PreparedScene {
+    /// The index (in `scene.emitters`) of the area emitter of primitive `primitive`, if it
+    /// emits.
+    #[inline]
+    pub fn emitter_of(&self, primitive: u32) -> Option<u32> {
+        match self.physical.emitter_of.get(primitive as usize) {
+            Some(&e) if e != NO_EMITTER => Some(e),
+            _ => None,
+        }
+    }
+
+    /// The scene's environment map, if it has one.
+    pub fn environment_map(&self) -> Option<&Arc<EnvironmentMap>> {
+        self.physical.environment.as_ref()
+    }
+
+    /// Whether the scene is physically based (a Mitsuba scene): it has physical materials or
+    /// emitters, which only the path model renders.
+    pub fn is_physical(&self) -> bool {
+        !self.scene.emitters.is_empty() || self.has_physical_materials()
+    }
+
+    /// Mitsuba's texture coordinates at an interaction: a mesh's `(u, v)` as its file gives them
+    /// (the barycentric weights without), a sphere's `(phi / 2 pi, theta / pi)` about `+z`.
+    #[inline]
+    pub fn surface_uv(&self, at: &Interaction) -> (f64, f64) {
+        let shape = &self.scene.primitives[at.primitive as usize].shape;
+        match (shape, at.part) {
+            (Shape::Sphere(s), _) => {
+                let d = (at.point - s.centre) / s.radius;
+                let phi = d.y.atan2(d.x) / TAU;
+                (phi - phi.floor(), d.z.clamp(-1.0, 1.0).acos() / PI)
+            }
+            (_, part @ ShapePart::Triangle { .. }) => {
+                // The course's order is `(t, s)`.
+                let (t, s) = shape.texture_coordinates(at.point, part);
+                (s, t)
+            }
+            (_, part) => shape.texture_coordinates(at.point, part),
+        }
+    }
+
+    /// Mitsuba's shading frame at an interaction: the shading normal as the shape defines it
+    /// (`at.outward`) and a first tangent along `dp/du` (a mesh's texture parameterisation, a
+    /// sphere's azimuth), or Mitsuba's `coordinate_system` of the true normal where there is
+    /// none, made perpendicular to the normal. Returns `(tangent, bitangent, normal)`.
+    pub fn shading_frame(&self, at: &Interaction) -> (DVec3, DVec3, DVec3) {
+        let n = at.outward;
+        let shape = &self.scene.primitives[at.primitive as usize].shape;
+        let dpdu = match (shape, at.part) {
+            (Shape::Mesh(m), ShapePart::Triangle { index, .. }) => m.dp_ds(index),
+            (Shape::Sphere(s), _) => Some(DVec3::new(s.centre.y - at.point.y, at.point.x - s.centre.x, 0.0)),
+            _ => None,
+        };
+        let outward = if at.front { at.geometric } else { -at.geometric };
+        let dpdu = dpdu.unwrap_or_else(|| coordinate_system(outward).0);
+        let t = (dpdu - n * n.dot(dpdu)).try_normalize().unwrap_or_else(|| coordinate_system(n).0);
+        (t, n.cross(t), n)
+    }
+
+    /// A colour parameter at an interaction.
+    #[inline]
+    pub fn param(&self, param: &Param, at: &Interaction) -> DVec3 {
+        match param {
+            Param::Constant(c) => *c,
+            Param::Texture(t) => self.texture_value(t, at),
+        }
+    }
+
+    /// A scalar parameter at an interaction: a constant's first channel, a texture's luminance.
+    #[inline]
+    pub fn scalar_param(&self, param: &Param, at: &Interaction) -> f64 {
+        match param {
+            Param::Constant(c) => c.x,
+            Param::Texture(t) => luminance(self.texture_value(t, at)),
+        }
+    }
+
+    fn texture_value(&self, spec: &Arc<TextureSpec>, at: &Interaction) -> DVec3 {
+        let (u, v) = self.surface_uv(at);
+        match &**spec {
+            TextureSpec::Bitmap { nearest, wrap, to_uv, .. } => {
+                let p = to_uv.transform_point2(glam::DVec2::new(u, v));
+                match self.physical.bitmaps.get(&(Arc::as_ptr(spec) as usize)) {
+                    Some(b) => b.lookup(p.x, p.y, *nearest, *wrap),
+                    None => DVec3::ZERO,
+                }
+            }
+            TextureSpec::Checkerboard { color0, color1, to_uv } => {
+                let p = to_uv.transform_point2(glam::DVec2::new(u, v));
+                let (a, b) = (p.x - p.x.floor() > 0.5, p.y - p.y.floor() > 0.5);
+                if a == b { *color0 } else { *color1 }
+            }
+        }
+    }
+}
+
+/// The luminance of a linear sRGB colour (Rec. 709 weights, as Mitsuba's `luminance`).
+#[inline]
+pub fn luminance(c: DVec3) -> f64 {
+    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+}

@@ -1,0 +1,299 @@
+//! Mitsuba 3's own scene files (`../shared/mitsuba-data`: the Cornell box, the material preview,
+//! the documentation's scene of each plugin) rendered by rayterra and by Mitsuba 3 itself
+//! (`tools/mitsuba/render_xml.py`, variant `scalar_rgb`), at the same small size and sample
+//! count, and compared **statistically**.
+//!
+//! Each renderer renders each scene as two independent halves (seeds 0 and 1); half the
+//! difference of the halves estimates the noise of their mean, pixel by pixel. Over every 8 x 8
+//! block and channel, the difference of the two means divided by the noise of the difference is
+//! a z-score (with a floor of 1e-4 of the block's value on the noise, the output's precision); a block fails when `|z| > 5` (a false alarm once in 1.7 million tests for normal
+//! noise: over the ~40 scenes of the full set and their ~320 block channels each, one false alarm
+//! in about 130 runs). Blocks dark in both images (under 1e-3) are not tested. The whole image's
+//! mean must also agree within 1% per channel (unless the difference is within three standard
+//! deviations of the two renders' noise, which a scene of small bright lights can have).
+//!
+//! A failing scene names its worst blocks and writes both images and their difference under
+//! `target/test-output/mitsuba/`. Mitsuba's renders are cached under `target/mitsuba-reference/`,
+//! keyed by a hash of the scene's files, the size, the samples and the tool.
+//!
+//! In CI a subset covering every supported plugin is compared; set `RAYTERRA_MITSUBA_ALL=1` to
+//! compare every scene whose plugins rayterra has (`docs/mitsuba-format.md` names the command).
+//! Skipped loudly when Mitsuba or the data is missing, except under CI.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use raytracer::base::checksum::Fnv;
+use raytracer::integrator::Model;
+use raytracer::render::{Progress, RenderSettings, Sampling};
+use raytracer::scene::Severity;
+use raytracer::scene::mitsuba;
+use raytracer::{Image, PreparedScene, TextureSearch};
+use support::pbr::{Halves, mitsuba_python};
+use support::{output_dir, workspace};
+
+/// Image width (the height follows the scene's film).
+const WIDTH: u32 = 96;
+/// Samples a pixel of each half.
+const HALF_SPP: u32 = 64;
+/// Block side in pixels.
+const BLOCK: u32 = 8;
+/// Largest |z| of a block channel.
+const Z_LIMIT: f64 = 5.0;
+/// Blocks darker than this in both images are not tested.
+const FLOOR: f64 = 1e-3;
+/// A relative difference always allowed (the output's single precision, and pixels whose every
+/// sample is the same, such as an emitter seen directly, whose halves estimate no noise).
+const PRECISION: f64 = 1e-4;
+/// Largest relative difference of the whole image's mean.
+const WHOLE_TOLERANCE: f64 = 0.01;
+
+/// The scenes compared in CI: every supported BSDF, emitter, shape, texture and integrator
+/// appears in at least one.
+const CI_SCENES: [&str; 20] = [
+    "scenes/cbox/cbox.xml",
+    "scenes/matpreview/matpreview.xml",
+    "docs/scenes/bsdf_diffuse_textured.xml",
+    "docs/scenes/bsdf_dielectric_glass.xml",
+    "docs/scenes/bsdf_thindielectric_glass.xml",
+    "docs/scenes/bsdf_roughdielectric_rough.xml",
+    "docs/scenes/bsdf_conductor_gold.xml",
+    "docs/scenes/bsdf_roughconductor_anisotropic_aluminium.xml",
+    "docs/scenes/bsdf_plastic_shiny.xml",
+    "docs/scenes/bsdf_roughplastic_ggx.xml",
+    "docs/scenes/bsdf_twosided_cbox_onesided.xml",
+    "docs/scenes/bsdf_mask_after.xml",
+    "docs/scenes/bsdf_blendbsdf.xml",
+    "docs/scenes/emitter_spot_no_texture.xml",
+    "docs/scenes/integrator_direct_both.xml",
+    "docs/scenes/integrator_depth_2.xml",
+    "docs/scenes/shape_disk.xml",
+    "docs/scenes/shape_cylinder_onesided.xml",
+    "docs/scenes/shape_sphere_light_analytic.xml",
+    "docs/scenes/shape_ply_bunny.xml",
+];
+
+/// Defines some documentation scenes need (they are written for Mitsuba's docs generator).
+const DEFINES: [(&str, &str); 1] = [("spp", "16")];
+
+/// `../shared/mitsuba-data`, or `None` (skipped loudly; a failure under CI).
+fn mitsuba_data() -> Option<PathBuf> {
+    let dir = test_skips::shared_data(
+        Path::new(env!("CARGO_MANIFEST_DIR")),
+        "mitsuba-data",
+        "raytracer Mitsuba scenes",
+    )?;
+    Some(dir)
+}
+
+fn defines() -> Vec<(String, String)> {
+    DEFINES.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+}
+
+/// Our scene, prepared, or why it is not compared (a plugin rayterra does not have).
+fn prepare(path: &Path) -> Result<(PreparedScene, Vec<PathBuf>), String> {
+    let doc = mitsuba::read_file(path, &defines()).map_err(|e| format!("unreadable: {e}"))?;
+    let built = mitsuba::build(&doc).map_err(|d| format!("not built: {}", d[0].message))?;
+    if let Some(w) = built.diagnostics.iter().find(|d| d.severity == Severity::Warning) {
+        return Err(format!("not compared: {}", w.message));
+    }
+    let files = doc.files.iter().map(|f| PathBuf::from(f.name())).collect();
+    let prepared =
+        PreparedScene::new(built.scene, &TextureSearch::default()).map_err(|d| format!("{d:?}"))?;
+    Ok((prepared, files))
+}
+
+/// Our render at `size`, `HALF_SPP` samples, with `seed`.
+fn ours(scene: &PreparedScene, size: (u32, u32), seed: u64) -> Image {
+    let settings = RenderSettings {
+        width: size.0,
+        height: size.1,
+        sampling: Sampling::Uniform(HALF_SPP),
+        seed,
+        model: Model::Path,
+        ..RenderSettings::for_scene(scene)
+    };
+    raytracer::render(scene, &settings, &|_: Progress| {}).expect("render").image
+}
+
+/// Mitsuba's render (cached), and whether it came from the cache.
+fn theirs(python: &Path, scene: &Path, files: &[PathBuf], size: (u32, u32), seed: u64) -> Image {
+    let tool = workspace().join("tools/mitsuba/render_xml.py");
+    let mut key = Fnv::default();
+    for f in files.iter().chain([&tool]) {
+        key.write(&std::fs::read(f).unwrap_or_default());
+    }
+    key.write_text(&format!("{size:?} {HALF_SPP} {seed} {DEFINES:?} mitsuba 3.9.1 scalar_rgb"));
+    let dir = output_dir().join("../mitsuba-reference");
+    std::fs::create_dir_all(&dir).expect("cache folder");
+    let stem = scene.file_stem().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+    let out = dir.join(format!("{stem}-{:016x}-{seed}.exr", key.0));
+    if !out.exists() {
+        let tmp = out.with_extension("partial.exr");
+        let mut cmd = Command::new(python);
+        cmd.arg(&tool).arg(scene).arg("-o").arg(&tmp);
+        for (k, v) in DEFINES {
+            cmd.args(["-D", &format!("{k}={v}")]);
+        }
+        cmd.args(["--size", &format!("{}x{}", size.0, size.1), "--spp", &HALF_SPP.to_string()]);
+        let result = cmd.args(["--seed", &seed.to_string()]).output().expect("run Mitsuba");
+        assert!(
+            result.status.success(),
+            "Mitsuba failed on {}:\n{}",
+            scene.display(),
+            String::from_utf8_lossy(&result.stderr)
+        );
+        std::fs::rename(&tmp, &out).expect("cache the reference");
+    }
+    let img = image::open(&out).expect("Mitsuba's EXR").to_rgb32f();
+    Image::new(img.width(), img.height(), img.pixels().map(|p| p.0).collect())
+}
+
+/// How a scene compared: the worst block's z-score, the failures, the whole image's relative
+/// difference.
+struct Outcome {
+    worst_z: f64,
+    failures: Vec<String>,
+    whole: [f64; 3],
+    /// The whole image's difference in units of its noise, per channel.
+    whole_z: [f64; 3],
+}
+
+fn compare(a: &Halves, b: &Halves) -> Outcome {
+    let (w, h) = (a.width, a.height);
+    let mut out = Outcome { worst_z: 0.0, failures: Vec::new(), whole: [0.0; 3], whole_z: [0.0; 3] };
+    let mut blocks = Vec::new();
+    for by in 0..h / BLOCK {
+        for bx in 0..w / BLOCK {
+            for c in 0..3 {
+                let (mut ma, mut mb, mut var) = (0.0, 0.0, 0.0);
+                for y in by * BLOCK..(by + 1) * BLOCK {
+                    for x in bx * BLOCK..(bx + 1) * BLOCK {
+                        let i = (y * w + x) as usize;
+                        ma += a.mean[i][c];
+                        mb += b.mean[i][c];
+                        var += a.variance[i][c] + b.variance[i][c];
+                    }
+                }
+                let n = (BLOCK * BLOCK) as f64;
+                let (ma, mb) = (ma / n, mb / n);
+                let sigma = (var / (n * n) + (PRECISION * ma.max(mb)).powi(2)).sqrt();
+                if ma.max(mb) < FLOOR {
+                    continue;
+                }
+                let z = if sigma > 0.0 {
+                    (ma - mb) / sigma
+                } else if ma == mb {
+                    0.0
+                } else {
+                    f64::INFINITY
+                };
+                out.worst_z = out.worst_z.max(z.abs());
+                if z.abs() > Z_LIMIT {
+                    blocks.push((
+                        z.abs(),
+                        format!("block ({bx}, {by}) channel {c}: {ma:.5} against {mb:.5}, z = {z:+.1}"),
+                    ));
+                }
+            }
+        }
+    }
+    blocks.sort_by(|x, y| y.0.total_cmp(&x.0));
+    out.failures = blocks.into_iter().take(8).map(|b| b.1).collect();
+    for c in 0..3 {
+        let sa: f64 = a.mean.iter().map(|p| p[c]).sum();
+        let sb: f64 = b.mean.iter().map(|p| p[c]).sum();
+        let var: f64 = a.variance.iter().chain(&b.variance).map(|v| v[c]).sum();
+        out.whole[c] = if sb > 0.0 { (sa - sb) / sb } else { 0.0 };
+        out.whole_z[c] = if var > 0.0 { (sa - sb) / var.sqrt() } else { 0.0 };
+    }
+    out
+}
+
+/// Writes both images and their difference for a failing scene.
+fn write_evidence(name: &str, a: &Halves, b: &Halves) -> PathBuf {
+    let dir = output_dir().join("mitsuba").join(name);
+    std::fs::create_dir_all(&dir).expect("evidence folder");
+    let image = |values: Vec<[f32; 3]>| Image::new(a.width, a.height, values);
+    let ours: Vec<[f32; 3]> = a.mean.iter().map(|p| p.map(|v| v as f32)).collect();
+    let theirs: Vec<[f32; 3]> = b.mean.iter().map(|p| p.map(|v| v as f32)).collect();
+    let diff: Vec<[f32; 3]> = a
+        .mean
+        .iter()
+        .zip(&b.mean)
+        .map(|(p, q)| std::array::from_fn(|c| (p[c] - q[c]).abs() as f32))
+        .collect();
+    for (file, img) in [("rayterra.exr", ours), ("mitsuba.exr", theirs), ("difference.exr", diff)] {
+        raytracer::image_io::write_image(&image(img), &dir.join(file), false).expect("write evidence");
+    }
+    dir
+}
+
+#[test]
+fn mitsuba_scenes_render_as_mitsuba_renders_them() {
+    let Some(data) = mitsuba_data() else { return };
+    let Some(python) = mitsuba_python() else { return };
+    let all = std::env::var_os("RAYTERRA_MITSUBA_ALL").is_some();
+    let mut scenes: Vec<PathBuf> = CI_SCENES.iter().map(|s| data.join(s)).collect();
+    if all {
+        scenes.clear();
+        for dir in ["scenes/cbox", "scenes/matpreview", "docs/scenes"] {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(data.join(dir))
+                .expect("list")
+                .map(|e| e.expect("entry").path())
+                .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+                .collect();
+            found.sort();
+            scenes.extend(found);
+        }
+    }
+    let mut failed = Vec::new();
+    for path in &scenes {
+        let name = path.file_stem().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+        let (scene, files) = match prepare(path) {
+            Ok(p) => p,
+            Err(why) => {
+                assert!(all, "{name} is in the CI set but {why}");
+                eprintln!("{name}: {why}");
+                continue;
+            }
+        };
+        let cam = &scene.scene.camera;
+        let height =
+            ((WIDTH as f64 * cam.image_height as f64 / cam.image_width as f64).round() as u32).max(BLOCK);
+        let size = (WIDTH, height);
+        let started = std::time::Instant::now();
+        let a = Halves::new(&ours(&scene, size, 0), &ours(&scene, size, 1));
+        let our_time = started.elapsed().as_secs_f64();
+        let started = std::time::Instant::now();
+        let b = Halves::new(&theirs(&python, path, &files, size, 0), &theirs(&python, path, &files, size, 1));
+        let their_time = started.elapsed().as_secs_f64();
+        let o = compare(&a, &b);
+        eprintln!(
+            "{name}: worst block |z| {:.1}, whole image {:+.2}% {:+.2}% {:+.2}% (z {:+.1} {:+.1} {:+.1}; ours {our_time:.1} s, Mitsuba {their_time:.1} s or cached)",
+            o.worst_z,
+            o.whole[0] * 100.0,
+            o.whole[1] * 100.0,
+            o.whole[2] * 100.0,
+            o.whole_z[0],
+            o.whole_z[1],
+            o.whole_z[2]
+        );
+        // The mean agrees within 1%, or the two renders cannot tell it apart from noise.
+        let whole_ok = (0..3).all(|c| o.whole[c].abs() <= WHOLE_TOLERANCE || o.whole_z[c].abs() <= 3.0);
+        if !o.failures.is_empty() || !whole_ok {
+            let dir = write_evidence(&name, &a, &b);
+            failed.push(format!(
+                "{name}: whole image {:+.2}% {:+.2}% {:+.2}%; {} (images in {})",
+                o.whole[0] * 100.0,
+                o.whole[1] * 100.0,
+                o.whole[2] * 100.0,
+                if o.failures.is_empty() { "every block agrees".to_string() } else { o.failures.join("; ") },
+                dir.display()
+            ));
+        }
+    }
+    assert!(failed.is_empty(), "scenes that disagree with Mitsuba:\n{}", failed.join("\n"));
+}
