@@ -209,10 +209,6 @@ fn beckmann_visible_slopes(cos_theta: f64, u1: f64, u2: f64) -> (f64, f64) {
     let maxval = erf(cot_theta);
     let norm = 1.0 + maxval + INV_SQRT_PI * tan_theta * (-cot_theta * cot_theta).exp();
     let target = u1 * norm;
-    let cdf = |x: f64| {
-        let s = erfinv(x);
-        1.0 + x + INV_SQRT_PI * tan_theta * (-s * s).exp()
-    };
     let (mut lo, mut hi) = (-1.0, maxval);
     // Initial guess: the analytic solution at theta = pi/2.
     let mut x = maxval - (maxval + 1.0) * erf((-(u1.ln())).sqrt());
@@ -220,16 +216,16 @@ fn beckmann_visible_slopes(cos_theta: f64, u1: f64, u2: f64) -> (f64, f64) {
         if !(x > lo && x < hi) {
             x = 0.5 * (lo + hi);
         }
-        let value = cdf(x) - target;
+        let slope = erfinv(x);
+        let value = 1.0 + x + INV_SQRT_PI * tan_theta * (-slope * slope).exp() - target;
         if value > 0.0 {
             hi = x;
         } else {
             lo = x;
         }
-        if value.abs() < 1e-13 * norm || hi - lo < 1e-15 {
+        if value.abs() < 1e-12 * norm || hi - lo < 1e-15 {
             break;
         }
-        let slope = erfinv(x);
         let derivative = 1.0 - slope * tan_theta;
         let next = x - value / derivative;
         x = if derivative > 0.0 && next > lo && next < hi { next } else { 0.5 * (lo + hi) };

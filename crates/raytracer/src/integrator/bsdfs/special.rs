@@ -117,7 +117,7 @@ pub fn erfinv(y: f64) -> f64 {
         p * y
     };
     // Newton on erf(x) - y; in the far tail work on erfc to keep precision.
-    for _ in 0..3 {
+    for _ in 0..2 {
         // y - erf(x), in the tail as sign(y) (erfc(|x|) - (1 - |y|)) (x has y's sign).
         let err = if x.abs() > 2.0 { (erfc(x.abs()) - (1.0 - y.abs())) * y.signum() } else { y - erf(x) };
         let step = err / (TWO_OVER_SQRT_PI * (-x * x).exp());
