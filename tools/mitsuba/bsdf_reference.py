@@ -34,7 +34,25 @@ CASES = {
     "roughplastic_ggx": {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3, "diffuse_reflectance": BASE},
     "roughplastic_beckmann": {"type": "roughplastic", "distribution": "beckmann", "alpha": 0.1, "diffuse_reflectance": BASE, "nonlinear": True},
     "diffuse": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.5, 0.2]}},
+    "twosided": {"type": "twosided",
+                 "front": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.5, 0.2]}},
+                 "back": {"type": "roughconductor", "distribution": "ggx", "alpha_u": 0.2, "alpha_v": 0.4, **GOLD}},
+    "mask": {"type": "mask", "opacity": 0.3,
+             "bsdf": {"type": "roughplastic", "distribution": "ggx", "alpha": 0.3, "diffuse_reflectance": BASE}},
+    "blend": {"type": "blendbsdf", "weight": 0.3,
+              "bsdf_0": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.5, 0.2]}},
+              "bsdf_1": {"type": "roughdielectric", "distribution": "ggx", "alpha": 0.3}},
 }
+
+# Delta BSDFs: `sample` at fixed numbers, (name, wo, sample1) -> (wi, weight, pdf, eta).
+DELTA = {
+    "dielectric": {"type": "dielectric"},
+    "thindielectric": {"type": "thindielectric"},
+    "conductor": {"type": "conductor", **GOLD},
+    "plastic": {"type": "plastic", "diffuse_reflectance": {"type": "rgb", "value": [0.6, 0.3, 0.1]}},
+}
+DELTA_CASES = [((30, 20), 0.01), ((30, 20), 0.9), ((75, 100), 0.05), ((75, 100), 0.6),
+               ((150, 40), 0.01), ((150, 40), 0.9), ((120, 200), 0.5)]
 
 PAIRS = [((30, 20), (50, 200)), ((0, 0), (20, 10)), ((60, 120), (140, 300)), ((70, 0), (60, 180)),
          ((150, 40), (30, 250)), ((150, 40), (120, 220))]
@@ -66,3 +84,16 @@ for name, spec in CASES.items():
         f = [value[i] / abs(w[2]) for i in range(3)]
         print(f'    ("{name}", ({wo[0]:.1f}, {wo[1]:.1f}), ({wi[0]:.1f}, {wi[1]:.1f}), '
               f"[{f[0]:.7e}, {f[1]:.7e}, {f[2]:.7e}], {pdf:.7e}),")
+
+print("// delta")
+for name, spec in DELTA.items():
+    bsdf = mi.load_dict(spec)
+    for wo, u in DELTA_CASES:
+        si = interaction(direction(*wo))
+        bs, weight = bsdf.sample(ctx, si, u, mi.Point2f(0.5, 0.5))
+        if bs.pdf == 0 or not mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta):
+            print(f'    ("{name}", ({wo[0]:.1f}, {wo[1]:.1f}), {u}, None),')
+            continue
+        w = bs.wo
+        print(f'    ("{name}", ({wo[0]:.1f}, {wo[1]:.1f}), {u}, Some(([{w[0]:.9e}, {w[1]:.9e}, {w[2]:.9e}], '
+              f"[{weight[0]:.7e}, {weight[1]:.7e}, {weight[2]:.7e}], {bs.pdf:.7e}, {bs.eta:.7e}))),")
