@@ -86,7 +86,8 @@ impl MicrofacetDistribution {
             Distribution::Beckmann => {
                 // a = 1 / (alpha tan theta); Lambda = (erf(a) - 1)/2 + exp(-a^2) / (2 a sqrt(pi))
                 let a = 1.0 / tan2.sqrt();
-                if a > 26.0 {
+                // Beyond a = 6 Lambda is below 1e-17.
+                if a > 6.0 {
                     return 0.0;
                 }
                 0.5 * (erf(a) - 1.0) + (-a * a).exp() * INV_SQRT_PI / (2.0 * a)
