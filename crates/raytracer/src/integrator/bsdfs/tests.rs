@@ -1440,6 +1440,60 @@ fn delta_samples_match_mitsuba() {
 }
 
 #[test]
+fn degenerate_directions_give_finite_non_negative_values() {
+    // Grazing (z = 0), the poles, and tiny roughness: never NaN, never negative, never a panic.
+    let mut materials: Vec<Material> = variants().into_iter().map(|(_, m, _)| m).collect();
+    for kind in [Distribution::Beckmann, Distribution::Ggx] {
+        let mf = microfacet(kind, 0.0, 1e-9, true);
+        materials.push(Material::RoughConductor { metal: gold(), microfacet: mf.clone() });
+        materials.push(Material::RoughDielectric { interface: interface(1.5046), microfacet: mf.clone() });
+        materials.push(Material::RoughPlastic { coating: coating(c(0.5)), microfacet: mf });
+    }
+    let special = [
+        DVec3::Z,
+        -DVec3::Z,
+        DVec3::X,
+        DVec3::new(0.6, 0.8, 0.0),
+        dir(89.999_999, 10.0),
+        dir(90.000_001, 10.0),
+    ];
+    let mut rng = Pcg64Mcg::seed_from_u64(99);
+    for m in &materials {
+        let b = build(m);
+        for &wo in &special {
+            for &wi in &special {
+                let f = b.eval(wo, wi);
+                let p = b.pdf(wo, wi);
+                assert!(
+                    f.is_finite() && f.min_element() >= 0.0 && p.is_finite() && p >= 0.0,
+                    "{m:?} {wo} {wi}"
+                );
+            }
+            for u in [0.0, 0.5, 1.0 - f64::EPSILON] {
+                for _ in 0..20 {
+                    if let Some(s) = b.sample(wo, u, rng.random(), rng.random()) {
+                        assert!(s.weight.is_finite() && s.weight.min_element() >= 0.0, "{m:?} {wo}: {s:?}");
+                        assert!(
+                            s.pdf.is_finite() && s.pdf > 0.0 && s.eta.is_finite() && s.eta > 0.0,
+                            "{s:?}"
+                        );
+                        assert!(s.wi.is_finite(), "{s:?}");
+                    }
+                }
+                for (u1, u2) in [(0.0, 0.0), (1.0 - f64::EPSILON, 1.0 - f64::EPSILON)] {
+                    if let Some(s) = b.sample(wo, u, u1, u2) {
+                        assert!(
+                            s.weight.is_finite() && s.pdf.is_finite() && s.wi.is_finite(),
+                            "{m:?} {wo}: {s:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
 #[ignore]
 fn debug_sizes_and_speed() {
     println!(
