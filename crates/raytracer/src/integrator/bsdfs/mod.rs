@@ -15,6 +15,33 @@
 //! black when `wo.z <= 0` or `wi.z <= 0`; the dielectrics work from both sides. The wrappers
 //! (`twosided`, `mask`, `blendbsdf`) are flattened into at most [`MAX_COMPONENTS`] weighted
 //! components (see [`wrappers`]).
+//!
+//! ```
+//! use glam::DVec3;
+//! use raytracer::integrator::bsdfs::PhysicalBsdf;
+//! use raytracer::material::{Interface, Material, Param};
+//!
+//! // Mitsuba's default `dielectric`: BK7 glass in air.
+//! let glass = Material::Dielectric(Interface {
+//!     int_ior: 1.5046,
+//!     ext_ior: 1.000277,
+//!     specular_reflectance: Param::scalar(1.0),
+//!     specular_transmittance: Param::scalar(1.0),
+//! });
+//! // Constants only here; a renderer looks textures up at the hit point.
+//! let bsdf = PhysicalBsdf::new(&glass, &mut |p| match p {
+//!     Param::Constant(v) => *v,
+//!     Param::Texture(_) => unreachable!("no textures in this example"),
+//! });
+//! let wo = DVec3::new(0.0, 0.6, 0.8); // towards the viewer, 36.9 degrees off the normal
+//! // u_lobe = 0.9 > F (about 0.04): refraction into the glass, radiance scaled by 1 / eta^2.
+//! let s = bsdf.sample(wo, 0.9, 0.5, 0.5).expect("glass scatters");
+//! assert!(s.delta && s.wi.z < 0.0);
+//! assert!((s.eta - 1.5046 / 1.000277).abs() < 1e-12);
+//! assert!((s.weight.x - 1.0 / (s.eta * s.eta)).abs() < 1e-12);
+//! assert_eq!(bsdf.eval(wo, s.wi), DVec3::ZERO); // a delta lobe has no density
+//! assert!(!bsdf.has_smooth()); // nothing for next-event estimation
+//! ```
 
 pub mod conductor;
 pub mod dielectric;
