@@ -53,6 +53,11 @@ impl Camera {
         }
     }
 
+    /// The image's width and height in pixels.
+    pub fn image_size(&self) -> (f64, f64) {
+        (self.width, self.height)
+    }
+
     /// Whether the camera has a lens (depth of field).
     pub fn has_lens(&self) -> bool {
         self.aperture > 0.0

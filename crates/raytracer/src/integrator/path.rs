@@ -184,12 +184,22 @@ impl<'s> Tracer<'s> {
     }
 }
 
-/// Where in its pixel a sample goes, `(0, 0)` the pixel's top-left corner: drawn from the
-/// reconstruction filter's own density around the pixel's centre (filter importance sampling),
-/// so every sample weighs 1 and the pixel's mean converges to the filtered image Mitsuba's
-/// weighted splatting converges to. The box filter draws exactly as the course's sampler did.
+/// Where in its pixel a sample goes, `(0, 0)` the top-left corner of pixel `pixel` of an image
+/// of `size` pixels: drawn from the reconstruction filter's own density around the pixel's
+/// centre (filter importance sampling), restricted to the image as Mitsuba's film restricts its
+/// samples, so every sample weighs 1 and the pixel's mean converges to the filtered image
+/// Mitsuba's weighted splatting converges to. The box filter draws exactly as the course's
+/// sampler did.
 #[inline]
-pub fn filter_offset(filter: PixelFilter, rng: &mut PixelRng) -> (f64, f64) {
+pub fn filter_offset(
+    filter: PixelFilter,
+    rng: &mut PixelRng,
+    pixel: (u32, u32),
+    size: (f64, f64),
+) -> (f64, f64) {
+    let inside = |dx: f64, dy: f64| {
+        (0.0..size.0).contains(&(pixel.0 as f64 + dx)) && (0.0..size.1).contains(&(pixel.1 as f64 + dy))
+    };
     match filter {
         PixelFilter::Box => (rng.uniform(), rng.uniform()),
         PixelFilter::Tent { radius } => {
@@ -200,7 +210,12 @@ pub fn filter_offset(filter: PixelFilter, rng: &mut PixelRng) -> (f64, f64) {
                     radius * (1.0 - (2.0 - 2.0 * u).sqrt())
                 }
             };
-            (0.5 + tent(rng.uniform()), 0.5 + tent(rng.uniform()))
+            loop {
+                let (dx, dy) = (0.5 + tent(rng.uniform()), 0.5 + tent(rng.uniform()));
+                if inside(dx, dy) {
+                    return (dx, dy);
+                }
+            }
         }
         PixelFilter::Gaussian { stddev } => {
             // Mitsuba's filter is `g(x) - g(R)` on [-R, R], R = 4 stddev, per axis: Gaussian pairs
@@ -216,6 +231,7 @@ pub fn filter_offset(filter: PixelFilter, rng: &mut PixelRng) -> (f64, f64) {
                 if x.abs() < radius
                     && y.abs() < radius
                     && keep * g(x) * g(y) < (g(x) - floor) * (g(y) - floor)
+                    && inside(0.5 + x, 0.5 + y)
                 {
                     return (0.5 + x, 0.5 + y);
                 }
@@ -241,6 +257,7 @@ pub fn render_sums(
 ) -> (Vec<ExactSum>, u64) {
     let tracer = Tracer::new(scene, max_depth);
     let filter = scene.scene.render.filter;
+    let image_size = camera.image_size();
     let width = rows.width() as usize;
     let ys: Vec<u32> = rows.ys().collect();
     let mut sums = vec![ExactSum::default(); rows.len()];
@@ -255,7 +272,7 @@ pub fn render_sums(
                 let x = x as u32;
                 for s in samples.clone() {
                     let mut rng = PixelRng::for_sample(seed, stream::PATH, x, y, s);
-                    let (dx, dy) = filter_offset(filter, &mut rng);
+                    let (dx, dy) = filter_offset(filter, &mut rng, (x, y), image_size);
                     let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
                     let result = tracer.radiance(camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
                     sum.add(result.radiance);

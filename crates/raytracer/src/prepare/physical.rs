@@ -53,12 +53,26 @@ impl EnvironmentMap {
         (self.to_world * DVec3::new(sin_t * sin_p, cos_t, -sin_t * cos_p), sin_t)
     }
 
-    /// The radiance arriving from direction `dir` (bilinear in the image, wrapping around in
-    /// `u`).
+    /// The radiance arriving from direction `dir`: bilinear in the image as Mitsuba's `envmap`
+    /// evaluates it, texel centres at `u = (i + 0.5) / width` (wrapping around) and at
+    /// `v = j / (height - 1)` (the first and last rows on the poles).
     #[inline]
     pub fn radiance(&self, dir: DVec3) -> DVec3 {
         let (u, v) = self.uv(dir);
-        self.image.lookup(u, v, false, crate::material::Wrap::Repeat) * self.scale
+        let (w, h) = (self.image.width(), self.image.height());
+        let x = u * w as f64 - 0.5;
+        let x0 = x.floor();
+        let fx = x - x0;
+        let x0 = (x0 as i64).rem_euclid(w as i64) as u32;
+        let x1 = (x0 + 1) % w;
+        let y = (v * h.saturating_sub(1) as f64).clamp(0.0, h.saturating_sub(1) as f64);
+        let y0 = (y.floor() as u32).min(h.saturating_sub(2));
+        let fy = if h > 1 { y - y0 as f64 } else { 0.0 };
+        let y1 = (y0 + 1).min(h - 1);
+        let t = |x, y| self.image.texel(x, y);
+        let top = t(x0, y0) * (1.0 - fx) + t(x1, y0) * fx;
+        let bottom = t(x0, y1) * (1.0 - fx) + t(x1, y1) * fx;
+        (top * (1.0 - fy) + bottom * fy) * self.scale
     }
 }
 

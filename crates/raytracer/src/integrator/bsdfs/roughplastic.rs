@@ -7,13 +7,12 @@
 //! with `nonlinear`), `R_int` the coating's hemispherical internal reflectance. Both are
 //! integrals of the microfacet model computed here as Mitsuba computes them
 //! (`eval_transmittance`, `eval_reflectance`: Gauss-Legendre quadrature over the visible-normal
-//! sample space, 32 x 32 nodes, 128 x 128 when the index ratio is below 1), and cached per
-//! thread.
+//! sample space, 32 x 32 nodes, 128 x 128 when the index ratio is below 1), and cached for
+//! the process.
 
-use std::cell::RefCell;
 use std::collections::HashMap;
 use std::f64::consts::FRAC_1_PI;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock, RwLock};
 
 use glam::DVec3;
 
@@ -61,26 +60,27 @@ impl CoatingTable {
         (1.0 - w) * self.external_transmittance[i] + w * self.external_transmittance[i + 1]
     }
 
-    /// The table for these parameters, from this thread's cache (computed on first use).
+    /// The table for these parameters, from the process's cache (computed on first use; a
+    /// table depends only on its parameters, so sharing it between threads and renders changes
+    /// no value). Renders create their own thread pools, so a per-thread cache would compute
+    /// every table again for each one.
     pub fn cached(kind: Distribution, alpha: f64, eta: f64) -> Arc<CoatingTable> {
         type Key = (u8, u64, u64);
-        thread_local! {
-            static CACHE: RefCell<HashMap<Key, Arc<CoatingTable>>> = RefCell::new(HashMap::new());
-        }
+        static CACHE: OnceLock<RwLock<HashMap<Key, Arc<CoatingTable>>>> = OnceLock::new();
+        let cache = CACHE.get_or_init(Default::default);
         let key = (kind as u8, alpha.to_bits(), eta.to_bits());
-        CACHE.with(|cache| {
-            if let Some(t) = cache.borrow().get(&key) {
-                return Arc::clone(t);
-            }
-            let table = Arc::new(CoatingTable::compute(kind, alpha, eta));
-            let mut cache = cache.borrow_mut();
+        if let Some(t) = cache.read().ok().and_then(|c| c.get(&key).cloned()) {
+            return t;
+        }
+        let table = Arc::new(CoatingTable::compute(kind, alpha, eta));
+        if let Ok(mut c) = cache.write() {
             // Bounded: a textured roughness would otherwise fill it without end.
-            if cache.len() >= 256 {
-                cache.clear();
+            if c.len() >= 256 {
+                c.clear();
             }
-            cache.insert(key, Arc::clone(&table));
-            table
-        })
+            c.entry(key).or_insert_with(|| Arc::clone(&table));
+        }
+        table
     }
 }
 
