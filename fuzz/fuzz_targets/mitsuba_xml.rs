@@ -1,5 +1,6 @@
 //! The Mitsuba 3 XML scene reader on any bytes: decoding, XML, parameters, properties,
-//! transforms, spectra, ids and references, and printing every error. Relative includes and
+//! transforms, spectra, ids and references, and printing every error; then the scene builder on
+//! what reads (sensors, films, shapes, BSDFs, textures, emitters and their parameters). Relative includes and
 //! `<path>` folders resolve nowhere (the text has no folder), so only absolute ones can be read
 //! (bounded, regular files only, as for any scene file).
 #![no_main]
@@ -22,6 +23,15 @@ fuzz_target!(|bytes: &[u8]| {
                 for property in &plugin.properties {
                     let _ = doc.location(property.pos);
                 }
+            }
+            // Building never panics: a scene, or errors with their places.
+            match mitsuba::build(&doc) {
+                Ok(built) => {
+                    for p in &built.scene.primitives {
+                        let _ = p.shape.bounds();
+                    }
+                }
+                Err(errors) => assert!(errors.iter().any(|d| d.is_error())),
             }
         }
         Err(error) => {

@@ -421,7 +421,11 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
             settings,
             denoiser,
             prepare_time,
-            syntax: crate::preview::PoseSyntax::Course,
+            syntax: if mitsuba {
+                crate::preview::PoseSyntax::Mitsuba
+            } else {
+                crate::preview::PoseSyntax::Course
+            },
         });
     }
 

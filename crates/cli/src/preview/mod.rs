@@ -107,7 +107,7 @@ impl Shared {
 /// writes the output as `rayterra render` does.
 pub fn run(job: Job<'_>) -> Result<(), ExitCode> {
     let shared = Shared::default();
-    let scene_pose = Pose { eye: job.prepared.scene.camera.eye, dir: job.prepared.scene.camera.dir };
+    let scene_pose = Pose::of_camera(&job.prepared.scene.camera);
     let setup = window::Setup {
         title: job.scene_name.clone(),
         image: (job.settings.width, job.settings.height),

@@ -573,9 +573,12 @@ impl App<'_> {
 
     /// Sends the fly camera's pose to the worker if it is not the last one sent.
     fn send_pose(&mut self) {
-        let pose = pose_of(&self.camera);
-        let last =
-            if self.moved { self.pose } else { pose_of(&fly_camera(&self.setup.pose, self.setup.speed)) };
+        let pose = pose_of(&self.camera, self.setup.pose.up);
+        let last = if self.moved {
+            self.pose
+        } else {
+            pose_of(&fly_camera(&self.setup.pose, self.setup.speed), self.setup.pose.up)
+        };
         if pose != last {
             self.moved = true;
             self.pose = pose;

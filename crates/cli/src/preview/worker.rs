@@ -27,13 +27,12 @@ const DENOISE_EVERY: Duration = Duration::from_secs(1);
 /// Renders until the window is gone and the render of the pose it left is written.
 pub(super) fn work(shared: &Shared, job: Job<'_>, wake: &(dyn Fn() + Sync)) -> Result<(), ExitCode> {
     let Job { args, scene_name, mut prepared, settings, denoiser, prepare_time, syntax } = job;
-    let scene_pose = Pose { eye: prepared.scene.camera.eye, dir: prepared.scene.camera.dir };
+    let scene_pose = Pose::of_camera(&prepared.scene.camera);
     let mut pose = scene_pose;
     let mut serial = 0;
     let mut draft = false;
     loop {
-        prepared.scene.camera.eye = pose.eye;
-        prepared.scene.camera.dir = pose.dir;
+        pose.apply(&mut prepared.scene.camera);
         let started = Instant::now();
         let mut denoising = Denoising { aovs: None, last: None };
         let mut publish = |snapshot: &Snapshot<'_>, status: String, scale: u32| {

@@ -27,6 +27,8 @@ use crate::base::sampler::{PixelRng, stream};
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrator::bsdf::{Bsdf, Transport, class};
+use crate::integrator::bsdfs::PhysicalBsdf;
+use crate::integrator::emitters::Emitters;
 use crate::integrator::lights::Lights;
 use crate::prepare::{Hit, PreparedScene};
 
@@ -60,14 +62,24 @@ struct Sample {
 }
 
 /// Follows `ray` through perfect specular surfaces to the first smooth one (see the module notes).
-fn follow(scene: &PreparedScene, lights: &Lights<'_>, mut ray: Ray, rng: &mut PixelRng) -> Sample {
+fn follow(
+    scene: &PreparedScene,
+    lights: &Lights<'_>,
+    emitters: Option<&Emitters<'_>>,
+    mut ray: Ray,
+    rng: &mut PixelRng,
+) -> Sample {
     let mut tint = DVec3::ONE;
     let mut depth = 0.0;
     let mut last_normal = DVec3::ZERO;
     for _ in 0..=MAX_SPECULAR_BOUNCES {
         let (primitive, hit) = match scene.closest_hit(&ray) {
             Hit::Miss => {
-                let background = lights.environment(ray.dir).clamp(DVec3::ZERO, DVec3::ONE);
+                let background = match emitters {
+                    Some(e) => e.environment(ray.dir),
+                    None => lights.environment(ray.dir),
+                }
+                .clamp(DVec3::ZERO, DVec3::ONE);
                 return Sample {
                     albedo: (tint * background).min(DVec3::ONE),
                     normal: DVec3::ZERO,
@@ -88,6 +100,12 @@ fn follow(scene: &PreparedScene, lights: &Lights<'_>, mut ray: Ray, rng: &mut Pi
         let at = scene.interaction(&ray, primitive, hit);
         depth += at.t;
         last_normal = at.normal;
+        if scene.material(primitive).as_course().is_none() {
+            // A physically based material: the albedo of its lobes as seen from the front.
+            let bsdf = PhysicalBsdf::new(scene.material(primitive), &mut |p| scene.param(p, &at));
+            let albedo = (tint * bsdf.albedo()).clamp(DVec3::ZERO, DVec3::ONE);
+            return Sample { albedo, normal: at.normal, depth };
+        }
         let bsdf = Bsdf::new(scene.course_material(primitive), scene.surface_color(&at), &at);
         if bsdf.has(class::SMOOTH) || !bsdf.has(class::SPECULAR) {
             // A surface with a diffuse or glossy lobe, or one that does not scatter at all
@@ -119,6 +137,7 @@ pub fn render_aovs(
     samples: u32,
 ) -> Aovs {
     let lights = Lights::new(scene);
+    let emitters = scene.is_physical().then(|| Emitters::new(scene));
     let samples = samples.max(1);
     let w = width as usize;
     let mut pixels = vec![Sample::default(); w * height as usize];
@@ -130,8 +149,13 @@ pub fn render_aovs(
                     let mut rng = PixelRng::for_sample(seed, stream::AOV, x as u32, y as u32, s as u64);
                     let (dx, dy) = (rng.uniform(), rng.uniform());
                     let lens = if camera.has_lens() { (rng.uniform(), rng.uniform()) } else { (0.0, 0.0) };
-                    let found =
-                        follow(scene, &lights, camera.ray(x as f64 + dx, y as f64 + dy, lens), &mut rng);
+                    let found = follow(
+                        scene,
+                        &lights,
+                        emitters.as_ref(),
+                        camera.ray(x as f64 + dx, y as f64 + dy, lens),
+                        &mut rng,
+                    );
                     sum.albedo += found.albedo;
                     sum.normal += found.normal;
                     sum.depth += found.depth;

@@ -90,6 +90,10 @@ impl<'a> Builder<'a> {
                 return Ok(());
             }
         };
+        let infinite = |e: &Emitter| matches!(e, Emitter::Constant { .. } | Emitter::Environment { .. });
+        if infinite(&emitter) && self.scene.emitters.iter().any(infinite) {
+            return Err(props.error("a scene has at most one `constant` or `envmap` emitter, as in Mitsuba"));
+        }
         self.finish(&props);
         self.push_emitter(emitter);
         Ok(())

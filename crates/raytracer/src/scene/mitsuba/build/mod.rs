@@ -61,6 +61,7 @@ pub fn build(doc: &Document) -> Result<Built, Vec<Diagnostic>> {
         materials: HashMap::new(),
         textures: HashMap::new(),
         sensor_seen: false,
+        triangles: 0,
     };
     b.diagnostics.extend(doc.warnings.iter().cloned());
     let root = &doc.root;
@@ -117,6 +118,8 @@ struct Builder<'a> {
     textures: HashMap<*const Plugin, Arc<TextureSpec>>,
     /// Whether a sensor was read (the first one is used).
     sensor_seen: bool,
+    /// Triangles of the meshes built so far.
+    triangles: usize,
 }
 
 impl<'a> Builder<'a> {

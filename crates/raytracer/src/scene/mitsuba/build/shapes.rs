@@ -24,6 +24,10 @@ use crate::scene::{Diagnostic, Primitive};
 /// 2.6e-5 of the circle's.
 pub const CIRCLE_SEGMENTS: u32 = 512;
 
+/// Most triangles of all a scene's meshes together (instances count their copies): as many as
+/// one mesh file may hold.
+pub const MAX_SCENE_TRIANGLES: usize = crate::geometry::obj::MAX_TRIANGLES;
+
 /// `u32::MAX`: no index (no normals, no texture coordinates).
 const NONE: u32 = u32::MAX;
 
@@ -176,7 +180,9 @@ impl<'a> Builder<'a> {
                     (p1 - p0).extend(0.0),
                     p0.extend(1.0),
                 );
-                return Ok(Some(Indexed::cylinder().into_shape(to_world * local, flip)));
+                let mesh = Indexed::cylinder();
+                self.count_triangles(props, mesh.triangles.len())?;
+                return Ok(Some(mesh.into_shape(to_world * local, flip)));
             }
             _ => {
                 self.warn(props, "the scene is rendered without this shape");
@@ -184,7 +190,21 @@ impl<'a> Builder<'a> {
                 return Ok(None);
             }
         };
+        self.count_triangles(props, mesh.triangles.len())?;
         Ok(Some(mesh.into_shape(to_world, flip)))
+    }
+
+    /// Counts a mesh's triangles against [`MAX_SCENE_TRIANGLES`] (instances copy their group's
+    /// meshes, so a small file could otherwise ask for any number), refusing before the copy.
+    fn count_triangles(&mut self, props: &Props<'a>, triangles: usize) -> Result<(), Diagnostic> {
+        self.triangles = self.triangles.saturating_add(triangles);
+        if self.triangles > MAX_SCENE_TRIANGLES {
+            return Err(props.error(format!(
+                "the scene's meshes hold more than {MAX_SCENE_TRIANGLES} triangles with this one; \
+                 rayterra renders at most that many"
+            )));
+        }
+        Ok(())
     }
 
     /// The mesh file a shape names (`filename`), found as Mitsuba finds it.
