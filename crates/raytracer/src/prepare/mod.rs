@@ -80,6 +80,9 @@ pub struct PreparedScene {
     linear: FlatSet,
     /// Lights with a visible shape: (light index, shape).
     emitters: Vec<(u32, Shape)>,
+    /// Each primitive's rounding-error magnitude ([`Shape::magnitude`]), computed once rather
+    /// than at every hit (a square's takes two square roots).
+    magnitudes: Vec<f64>,
 }
 
 /// What a mesh's triangles and vertices take, for a report.
@@ -181,6 +184,7 @@ impl PreparedScene {
             bvh,
             linear,
             emitters,
+            magnitudes: scene.primitives.iter().map(|p| p.shape.magnitude()).collect(),
             textures,
             texture_of,
             diagnostics,

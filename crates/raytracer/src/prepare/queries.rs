@@ -29,6 +29,9 @@ impl PreparedScene {
     #[inline]
     pub fn closest_surface(&self, ray: &Ray) -> Option<(u32, ShapeHit)> {
         let mut best = self.linear.closest(ray, f64::INFINITY);
+        if self.bvh.is_empty() {
+            return best;
+        }
         let mut t_max = best.map_or(f64::INFINITY, |(_, h)| h.t);
         let prims = &self.scene.primitives;
         let items = self.bvh.order();
@@ -50,6 +53,9 @@ impl PreparedScene {
         if self.linear.any(ray, t_max) {
             return true;
         }
+        if self.bvh.is_empty() {
+            return false;
+        }
         let prims = &self.scene.primitives;
         let items = self.bvh.order();
         let mut found = false;
@@ -68,7 +74,7 @@ impl PreparedScene {
     /// The rounding-error magnitude of primitive `i` (see [`crate::geometry::offset_origin`]).
     #[inline]
     pub fn magnitude(&self, primitive: u32) -> f64 {
-        self.scene.primitives[primitive as usize].shape.magnitude()
+        self.magnitudes[primitive as usize]
     }
 
     /// The material of primitive `i`.
