@@ -204,7 +204,12 @@ impl Bsdf {
 
     /// The BSDF value `f(wo, wi)` of the lobes of `set` with a density (delta lobes give 0).
     pub fn eval(&self, wo: DVec3, wi: DVec3, set: u8) -> DVec3 {
-        let (o, i) = (self.to_local(wo), self.to_local(wi));
+        self.eval_local(self.to_local(wo), self.to_local(wi), set)
+    }
+
+    /// [`Bsdf::eval`] of the local directions `o` and `i`.
+    #[inline]
+    fn eval_local(&self, o: DVec3, i: DVec3, set: u8) -> DVec3 {
         if o.z <= 0.0 || i.z <= 0.0 {
             return DVec3::ZERO;
         }
@@ -224,8 +229,12 @@ impl Bsdf {
     /// The density with which [`Bsdf::sample`] over `set` draws `wi` (per steradian; delta lobes
     /// are not counted).
     pub fn pdf(&self, wo: DVec3, wi: DVec3, set: u8) -> f64 {
-        let total = self.choice_total(set);
-        let (o, i) = (self.to_local(wo), self.to_local(wi));
+        self.pdf_local(self.to_local(wo), self.to_local(wi), set, self.choice_total(set))
+    }
+
+    /// [`Bsdf::pdf`] of the local directions `o` and `i`, with `total = choice_total(set)`.
+    #[inline]
+    fn pdf_local(&self, o: DVec3, i: DVec3, set: u8, total: f64) -> f64 {
         if total <= 0.0 || o.z <= 0.0 || i.z <= 0.0 {
             return 0.0;
         }
@@ -301,11 +310,13 @@ impl Bsdf {
             return None;
         }
         let wi = self.to_world(i);
-        let pdf = self.pdf(wo, wi, set);
+        // As `pdf(wo, wi, set)` and `eval(wo, wi, set)`, sharing their local frame work.
+        let back = self.to_local(wi);
+        let pdf = self.pdf_local(o, back, set, total);
         if pdf <= 0.0 {
             return None;
         }
-        let weight = self.eval(wo, wi, set) * (i.z / pdf);
+        let weight = self.eval_local(o, back, set) * (i.z / pdf);
         Some(BsdfSample { wi, weight, pdf, delta: false, transmitted: false, eta_scale: 1.0 })
     }
 
