@@ -80,6 +80,9 @@ pub struct PreparedScene {
     linear: FlatSet,
     /// Lights with a visible shape: (light index, shape).
     emitters: Vec<(u32, Shape)>,
+    /// The same shapes when all are squares (a scene's usual lights), tested without a dispatch
+    /// on the kind of shape.
+    emitter_squares: Option<Vec<(u32, Square)>>,
     /// Each primitive's rounding-error magnitude ([`Shape::magnitude`]), computed once rather
     /// than at every hit (a square's takes two square roots).
     magnitudes: Vec<f64>,
@@ -174,7 +177,7 @@ impl PreparedScene {
             BuildParams::SHAPES,
         );
         let linear = FlatSet::new(&linear, &scene);
-        let emitters = scene
+        let emitters: Vec<(u32, Shape)> = scene
             .lights
             .iter()
             .enumerate()
@@ -183,6 +186,13 @@ impl PreparedScene {
         Ok(PreparedScene {
             bvh,
             linear,
+            emitter_squares: emitters
+                .iter()
+                .map(|(i, s)| match s {
+                    Shape::Square(q) => Some((*i, (**q).clone())),
+                    _ => None,
+                })
+                .collect::<Option<Vec<_>>>(),
             emitters,
             magnitudes: scene.primitives.iter().map(|p| p.shape.magnitude()).collect(),
             textures,

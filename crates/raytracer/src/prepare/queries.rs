@@ -15,10 +15,22 @@ impl PreparedScene {
             Some((primitive, hit)) => (Hit::Surface { primitive, hit }, hit.t),
             None => (Hit::Miss, f64::INFINITY),
         };
-        for (light, shape) in &self.emitters {
-            if let Some(hit) = shape.intersect(ray, 0.0, t_max) {
-                best = Hit::Emitter { light: *light, t: hit.t };
-                t_max = hit.t;
+        match &self.emitter_squares {
+            Some(squares) => {
+                for (light, square) in squares {
+                    if let Some(hit) = square.intersect(ray, 0.0, t_max) {
+                        best = Hit::Emitter { light: *light, t: hit.t };
+                        t_max = hit.t;
+                    }
+                }
+            }
+            None => {
+                for (light, shape) in &self.emitters {
+                    if let Some(hit) = shape.intersect(ray, 0.0, t_max) {
+                        best = Hit::Emitter { light: *light, t: hit.t };
+                        t_max = hit.t;
+                    }
+                }
             }
         }
         best
