@@ -94,7 +94,7 @@ impl Square {
 
     /// The hit with `t_min < t < t_max`. Solves for `(a, b)` directly (exact and cheaper than the
     /// seed report's angle sum); the border counts as inside.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<ShapeHit> {
         match self.aligned {
             None => self.intersect_any(ray, t_min, t_max),
