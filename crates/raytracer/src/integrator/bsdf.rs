@@ -108,6 +108,15 @@ pub struct BsdfSample {
     pub eta_scale: f64,
 }
 
+/// Two directions in a [`Bsdf`]'s local frame (see [`Bsdf::local_pair`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalPair {
+    /// The direction towards the viewer.
+    o: DVec3,
+    /// The direction towards the light.
+    i: DVec3,
+}
+
 /// The class of each lobe, given whether the mirror is rough.
 #[inline]
 fn class_of(lobe: usize, rough_mirror: bool) -> u8 {
@@ -224,6 +233,25 @@ impl Bsdf {
             f += self.tint[REFL] * ggx_f(o, i, self.refl_alpha);
         }
         f
+    }
+
+    /// The pair of directions `wo`, `wi` in the BSDF's local frame, for [`Bsdf::eval_pair`] and
+    /// [`Bsdf::pdf_pair`]: next-event estimation asks for both at the same pair.
+    #[inline]
+    pub fn local_pair(&self, wo: DVec3, wi: DVec3) -> LocalPair {
+        LocalPair { o: self.to_local(wo), i: self.to_local(wi) }
+    }
+
+    /// [`Bsdf::eval`] at a pair of directions made by [`Bsdf::local_pair`] (the same value).
+    #[inline]
+    pub fn eval_pair(&self, pair: &LocalPair, set: u8) -> DVec3 {
+        self.eval_local(pair.o, pair.i, set)
+    }
+
+    /// [`Bsdf::pdf`] at a pair of directions made by [`Bsdf::local_pair`] (the same value).
+    #[inline]
+    pub fn pdf_pair(&self, pair: &LocalPair, set: u8) -> f64 {
+        self.pdf_local(pair.o, pair.i, set, self.choice_total(set))
     }
 
     /// The density with which [`Bsdf::sample`] over `set` draws `wi` (per steradian; delta lobes
