@@ -404,6 +404,12 @@ impl WideBvh {
         self.nodes.len() * std::mem::size_of::<Node>() + self.order.len() * 4
     }
 
+    /// Whether the tree holds no item (a traversal visits nothing).
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.root == EMPTY
+    }
+
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
         self.nodes.len()

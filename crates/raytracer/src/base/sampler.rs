@@ -111,7 +111,7 @@ impl ExactSum {
     pub fn add(&mut self, sample: glam::DVec3) {
         for (sum, v) in self.fixed.iter_mut().zip(sample.to_array()) {
             let v = if v.is_finite() { v.clamp(-Self::LIMIT, Self::LIMIT) } else { 0.0 };
-            *sum += (v / Self::RESOLUTION).round() as i128;
+            *sum += round_to_i128(v / Self::RESOLUTION);
         }
     }
 
@@ -131,6 +131,22 @@ impl ExactSum {
         }
         let scale = Self::RESOLUTION / count as f64;
         glam::DVec3::from_array(self.fixed.map(|f| f as f64 * scale))
+    }
+}
+
+/// `y.round() as i128` (halves away from zero) for a finite `y`, without the library calls that
+/// baseline x86-64 needs for both (it has no rounding instruction and no 128-bit conversion):
+/// below `2^62` in magnitude, through a 64-bit truncation and the exact fraction it leaves
+/// (`y - trunc(y)` is exact; from `2^52` on `y` is already an integer and the fraction 0).
+#[inline]
+fn round_to_i128(y: f64) -> i128 {
+    const FAST: f64 = (1u64 << 62) as f64;
+    if y.abs() < FAST {
+        let whole = y as i64;
+        let fraction = y - whole as f64;
+        (whole + (fraction >= 0.5) as i64 - (fraction <= -0.5) as i64) as i128
+    } else {
+        y.round() as i128
     }
 }
 
@@ -214,6 +230,29 @@ impl Siblings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rounding_to_i128_is_rounding_halves_away_from_zero() {
+        let mut rng = PixelRng::from_key(3);
+        let mut values =
+            vec![0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5, 0.49999999999999994, -0.49999999999999994];
+        for e in [40, 51, 52, 53, 61, 62, 63, 80, 94] {
+            let p = 2f64.powi(e);
+            for x in
+                [p, -p, p.next_down(), -p.next_down(), p.next_up(), -p.next_up(), p + 0.5, p - 0.5, -p + 0.5]
+            {
+                values.push(x);
+            }
+        }
+        for _ in 0..100_000 {
+            let scale = 2f64.powi((rng.uniform() * 100.0) as i32 - 10);
+            values.push((rng.uniform() - 0.5) * scale);
+            values.push(((rng.uniform() * 1e6).floor() + 0.5) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 });
+        }
+        for y in values {
+            assert_eq!(round_to_i128(y), y.round() as i128, "{y:e}");
+        }
+    }
 
     #[test]
     fn strata_are_as_square_as_possible() {

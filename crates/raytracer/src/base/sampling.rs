@@ -123,8 +123,11 @@ impl Discrete {
     /// The index `u` in [0, 1) selects, and its probability (`None` when empty).
     #[inline]
     pub fn sample(&self, u: f64) -> Option<(usize, f64)> {
-        if self.cdf.is_empty() {
-            return None;
+        match self.cdf.len() {
+            0 => return None,
+            // One choice (a scene with one light): its probability is its cumulative one.
+            1 => return Some((0, self.cdf[0])),
+            _ => {}
         }
         let i = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
         Some((i, self.pmf(i)))

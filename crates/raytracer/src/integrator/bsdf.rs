@@ -108,6 +108,15 @@ pub struct BsdfSample {
     pub eta_scale: f64,
 }
 
+/// Two directions in a [`Bsdf`]'s local frame (see [`Bsdf::local_pair`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalPair {
+    /// The direction towards the viewer.
+    o: DVec3,
+    /// The direction towards the light.
+    i: DVec3,
+}
+
 /// The class of each lobe, given whether the mirror is rough.
 #[inline]
 fn class_of(lobe: usize, rough_mirror: bool) -> u8 {
@@ -204,7 +213,12 @@ impl Bsdf {
 
     /// The BSDF value `f(wo, wi)` of the lobes of `set` with a density (delta lobes give 0).
     pub fn eval(&self, wo: DVec3, wi: DVec3, set: u8) -> DVec3 {
-        let (o, i) = (self.to_local(wo), self.to_local(wi));
+        self.eval_local(self.to_local(wo), self.to_local(wi), set)
+    }
+
+    /// [`Bsdf::eval`] of the local directions `o` and `i`.
+    #[inline]
+    fn eval_local(&self, o: DVec3, i: DVec3, set: u8) -> DVec3 {
         if o.z <= 0.0 || i.z <= 0.0 {
             return DVec3::ZERO;
         }
@@ -221,11 +235,34 @@ impl Bsdf {
         f
     }
 
+    /// The pair of directions `wo`, `wi` in the BSDF's local frame, for [`Bsdf::eval_pair`] and
+    /// [`Bsdf::pdf_pair`]: next-event estimation asks for both at the same pair.
+    #[inline]
+    pub fn local_pair(&self, wo: DVec3, wi: DVec3) -> LocalPair {
+        LocalPair { o: self.to_local(wo), i: self.to_local(wi) }
+    }
+
+    /// [`Bsdf::eval`] at a pair of directions made by [`Bsdf::local_pair`] (the same value).
+    #[inline]
+    pub fn eval_pair(&self, pair: &LocalPair, set: u8) -> DVec3 {
+        self.eval_local(pair.o, pair.i, set)
+    }
+
+    /// [`Bsdf::pdf`] at a pair of directions made by [`Bsdf::local_pair`] (the same value).
+    #[inline]
+    pub fn pdf_pair(&self, pair: &LocalPair, set: u8) -> f64 {
+        self.pdf_local(pair.o, pair.i, set, self.choice_total(set))
+    }
+
     /// The density with which [`Bsdf::sample`] over `set` draws `wi` (per steradian; delta lobes
     /// are not counted).
     pub fn pdf(&self, wo: DVec3, wi: DVec3, set: u8) -> f64 {
-        let total = self.choice_total(set);
-        let (o, i) = (self.to_local(wo), self.to_local(wi));
+        self.pdf_local(self.to_local(wo), self.to_local(wi), set, self.choice_total(set))
+    }
+
+    /// [`Bsdf::pdf`] of the local directions `o` and `i`, with `total = choice_total(set)`.
+    #[inline]
+    fn pdf_local(&self, o: DVec3, i: DVec3, set: u8, total: f64) -> f64 {
         if total <= 0.0 || o.z <= 0.0 || i.z <= 0.0 {
             return 0.0;
         }
@@ -301,11 +338,13 @@ impl Bsdf {
             return None;
         }
         let wi = self.to_world(i);
-        let pdf = self.pdf(wo, wi, set);
+        // As `pdf(wo, wi, set)` and `eval(wo, wi, set)`, sharing their local frame work.
+        let back = self.to_local(wi);
+        let pdf = self.pdf_local(o, back, set, total);
         if pdf <= 0.0 {
             return None;
         }
-        let weight = self.eval(wo, wi, set) * (i.z / pdf);
+        let weight = self.eval_local(o, back, set) * (i.z / pdf);
         Some(BsdfSample { wi, weight, pdf, delta: false, transmitted: false, eta_scale: 1.0 })
     }
 

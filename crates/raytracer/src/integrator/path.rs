@@ -107,12 +107,13 @@ pub fn walk(
         if smooth != 0 && bsdf.has(smooth) && lights.any() {
             let (u, u1, u2) = (rng.uniform(), rng.uniform(), rng.uniform());
             if let Some(ls) = lights.sample(at.point, u, u1, u2) {
-                let f = bsdf.eval(wo, ls.wi, smooth);
+                let pair = bsdf.local_pair(wo, ls.wi);
+                let f = bsdf.eval_pair(&pair, smooth);
                 if f != DVec3::ZERO && lights.unoccluded(at.spawn(ls.wi).origin, ls.target, &mut out.rays) {
                     let weight = if ls.delta || vertex.stop {
                         1.0
                     } else {
-                        power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi, vertex.lobes))
+                        power_heuristic(ls.pdf, bsdf.pdf_pair(&pair, vertex.lobes))
                     };
                     out.radiance += beta * f * ls.radiance * (ls.wi.dot(at.normal).abs() * weight / ls.pdf);
                 }

@@ -79,7 +79,7 @@ impl PreparedScene {
             normal = geometric;
             outward = geometric_outward;
         }
-        let magnitude = shape.magnitude().max(point.abs().max_element());
+        let magnitude = self.magnitude(primitive).max(point.abs().max_element());
         Interaction {
             primitive,
             t: hit.t,

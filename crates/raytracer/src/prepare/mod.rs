@@ -85,6 +85,12 @@ pub struct PreparedScene {
     emitters: Vec<(u32, Shape)>,
     /// The bitmaps, environment map and emitting primitives of physically based scenes.
     physical: Physical,
+    /// The same shapes when all are squares (a scene's usual lights), tested without a dispatch
+    /// on the kind of shape.
+    emitter_squares: Option<Vec<(u32, Square)>>,
+    /// Each primitive's rounding-error magnitude ([`Shape::magnitude`]), computed once rather
+    /// than at every hit (a square's takes two square roots).
+    magnitudes: Vec<f64>,
 }
 
 /// What a mesh's triangles and vertices take, for a report.
@@ -181,7 +187,7 @@ impl PreparedScene {
             BuildParams::SHAPES,
         );
         let linear = FlatSet::new(&linear, &scene);
-        let emitters = scene
+        let emitters: Vec<(u32, Shape)> = scene
             .lights
             .iter()
             .enumerate()
@@ -190,8 +196,16 @@ impl PreparedScene {
         Ok(PreparedScene {
             bvh,
             linear,
+            emitter_squares: emitters
+                .iter()
+                .map(|(i, s)| match s {
+                    Shape::Square(q) => Some((*i, (**q).clone())),
+                    _ => None,
+                })
+                .collect::<Option<Vec<_>>>(),
             emitters,
             physical,
+            magnitudes: scene.primitives.iter().map(|p| p.shape.magnitude()).collect(),
             textures,
             texture_of,
             diagnostics,

@@ -15,10 +15,22 @@ impl PreparedScene {
             Some((primitive, hit)) => (Hit::Surface { primitive, hit }, hit.t),
             None => (Hit::Miss, f64::INFINITY),
         };
-        for (light, shape) in &self.emitters {
-            if let Some(hit) = shape.intersect(ray, 0.0, t_max) {
-                best = Hit::Emitter { light: *light, t: hit.t };
-                t_max = hit.t;
+        match &self.emitter_squares {
+            Some(squares) => {
+                for (light, square) in squares {
+                    if let Some(hit) = square.intersect(ray, 0.0, t_max) {
+                        best = Hit::Emitter { light: *light, t: hit.t };
+                        t_max = hit.t;
+                    }
+                }
+            }
+            None => {
+                for (light, shape) in &self.emitters {
+                    if let Some(hit) = shape.intersect(ray, 0.0, t_max) {
+                        best = Hit::Emitter { light: *light, t: hit.t };
+                        t_max = hit.t;
+                    }
+                }
             }
         }
         best
@@ -29,6 +41,9 @@ impl PreparedScene {
     #[inline]
     pub fn closest_surface(&self, ray: &Ray) -> Option<(u32, ShapeHit)> {
         let mut best = self.linear.closest(ray, f64::INFINITY);
+        if self.bvh.is_empty() {
+            return best;
+        }
         let mut t_max = best.map_or(f64::INFINITY, |(_, h)| h.t);
         let prims = &self.scene.primitives;
         let items = self.bvh.order();
@@ -50,6 +65,9 @@ impl PreparedScene {
         if self.linear.any(ray, t_max) {
             return true;
         }
+        if self.bvh.is_empty() {
+            return false;
+        }
         let prims = &self.scene.primitives;
         let items = self.bvh.order();
         let mut found = false;
@@ -68,7 +86,7 @@ impl PreparedScene {
     /// The rounding-error magnitude of primitive `i` (see [`crate::geometry::offset_origin`]).
     #[inline]
     pub fn magnitude(&self, primitive: u32) -> f64 {
-        self.scene.primitives[primitive as usize].shape.magnitude()
+        self.magnitudes[primitive as usize]
     }
 
     /// The material of primitive `i`.
