@@ -39,9 +39,11 @@ const SHOWCASE_NAME: &str = "scenes/showcase.txt (built in)";
     rayterra render scene.txt --model path --spp 64 --pass auto/16 -o pass.exr   in an array job\n  \
     rayterra render cornell-box.txt --model path --spp 16 --denoise -o out.exr   Open Image Denoise\n  \
     rayterra render cornell-box.txt --model path --preview   watch it converge, fly the camera\n  \
+    rayterra render cbox.xml -D spp=64 -o cbox.png     a Mitsuba 3 scene, with Mitsuba's -D\n  \
     rayterra render --check scene.txt                 validate only, print the warnings")]
 pub struct RenderArgs {
-    /// Scene file in the course scene language; without it, the built-in showcase scene.
+    /// Scene file in the course scene language, or a Mitsuba 3 XML scene (`.xml`); without it, the
+    /// built-in showcase scene.
     pub scene: Option<PathBuf>,
 
     /// Output image; the extension picks the format: .png, .bmp, .exr or .hdr (linear).

@@ -12,7 +12,12 @@
 //!    rays a second a core. Without LLVM (`DRJIT_LIBLLVM_PATH`, default
 //!    `/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1`) the bench says so and compares with
 //!    `scalar_rgb` alone.
-//! 2. SPPM on the course's `glass-trio-area-light.txt` at 640x380: the time of a render whose
+//! 2. The same on Mitsuba's own scene files, the same file read by both renderers (through
+//!    `tools/mitsuba/render_xml.py` on Mitsuba's side): `scenes/cbox/cbox.xml` (256x256, 64 spp,
+//!    the file's depth 6) and `scenes/matpreview/matpreview.xml` (meshes, an environment map, a
+//!    plastic; 256x192, 64 spp, unbounded depth with Russian roulette from depth 5), from
+//!    `../shared/mitsuba-data` (skipped, loudly, without it).
+//! 3. SPPM on the course's `glass-trio-area-light.txt` at 640x380: the time of a render whose
 //!    caustics are clearly visible (32 passes of 250,000 photons), with passes and photons a
 //!    second.
 //!
@@ -170,6 +175,8 @@ fn main() {
         }
     }
 
+    mitsuba_files(&root, &python, &llvm, llvm.is_file(), runs, threads);
+
     let trio = root.join("../shared/course-assets/scenes/glass-trio-area-light.txt");
     if !trio.is_file() {
         println!("**** the course scenes are missing ({}): SPPM not measured ****", trio.display());
@@ -203,5 +210,98 @@ fn main() {
             s.photons as f64 / t / 1e6,
             s.photon_seconds
         );
+    }
+}
+
+/// Mitsuba's render time in seconds for a Mitsuba scene file, through `render_xml.py`.
+fn mitsuba_xml(
+    python: &Path,
+    variant: &str,
+    llvm: &Path,
+    root: &Path,
+    case: &XmlCase,
+    out: &Path,
+) -> Option<f64> {
+    let mut cmd = Command::new(python);
+    cmd.env("DRJIT_LIBLLVM_PATH", llvm).arg(root.join("tools/mitsuba/render_xml.py")).arg(&case.path);
+    cmd.args(["-o", &out.to_string_lossy(), "--size", &format!("{}x{}", case.size.0, case.size.1)]);
+    cmd.args(["--spp", &case.spp.to_string(), "--variant", variant]);
+    let result = cmd.output().ok()?;
+    if !result.status.success() {
+        eprintln!(
+            "Mitsuba ({variant}) failed on {}: {}",
+            case.path.display(),
+            String::from_utf8_lossy(&result.stderr)
+        );
+        return None;
+    }
+    let stdout = String::from_utf8_lossy(&result.stdout);
+    stdout.split_whitespace().skip_while(|w| *w != "render").nth(1)?.parse().ok()
+}
+
+/// A Mitsuba scene file of the benchmark.
+struct XmlCase {
+    path: PathBuf,
+    size: (u32, u32),
+    spp: u32,
+}
+
+/// Part 2: Mitsuba's scene files, rendered alternately by both.
+fn mitsuba_files(root: &Path, python: &Path, llvm: &Path, has_llvm: bool, runs: usize, threads: usize) {
+    let data = root.join("../shared/mitsuba-data");
+    if !data.join("SOURCES.md").is_file() {
+        println!("**** the Mitsuba scenes are missing ({}): not measured ****", data.display());
+        return;
+    }
+    let cases = [
+        XmlCase { path: data.join("scenes/cbox/cbox.xml"), size: (256, 256), spp: 64 },
+        XmlCase { path: data.join("scenes/matpreview/matpreview.xml"), size: (256, 192), spp: 64 },
+    ];
+    let out = std::env::temp_dir().join("rayterra-bench-mitsuba-xml.exr");
+    for case in &cases {
+        let doc = match raytracer::scene::mitsuba::read_file(&case.path, &[]) {
+            Ok(doc) => doc,
+            Err(e) => {
+                println!("**** {} cannot be read: {e} ****", case.path.display());
+                continue;
+            }
+        };
+        let built = raytracer::scene::mitsuba::build(&doc).expect("the benchmark's scenes build");
+        let scene = PreparedScene::new(built.scene, &TextureSearch::default()).expect("prepares");
+        let settings = RenderSettings {
+            width: case.size.0,
+            height: case.size.1,
+            sampling: Sampling::Uniform(case.spp),
+            ..RenderSettings::for_scene(&scene)
+        };
+        let name = case.path.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        println!(
+            "path tracer against Mitsuba 3 on {name}: {}x{}, {} spp, depth {} (the file's), {threads} threads, {runs} rounds",
+            case.size.0, case.size.1, case.spp, settings.max_depth
+        );
+        let mut variants = vec!["scalar_rgb"];
+        if has_llvm && mitsuba_xml(python, "llvm_ad_rgb", llvm, root, case, &out).is_some() {
+            // Warm: the first run filled Dr.Jit's kernel cache.
+            variants.insert(0, "llvm_ad_rgb");
+        }
+        let mut ratios: Vec<(&str, Vec<f64>)> = variants.iter().map(|v| (*v, Vec::new())).collect();
+        for run in 0..runs {
+            let started = Instant::now();
+            raytracer::render(&scene, &settings, &|_: Progress| {}).expect("render");
+            let ours = started.elapsed().as_secs_f64();
+            let mut line = format!("  round {run}: ours {ours:.2} s");
+            for (variant, list) in ratios.iter_mut() {
+                if let Some(t) = mitsuba_xml(python, variant, llvm, root, case, &out) {
+                    line += &format!(", {variant} {t:.2} s (ours/theirs {:.3})", ours / t);
+                    list.push(ours / t);
+                }
+            }
+            println!("{line}");
+        }
+        for (variant, list) in &ratios {
+            if !list.is_empty() {
+                println!("  time ratio ours/{variant} on {name}: {} (median, range of rounds)", spread(list));
+            }
+        }
     }
 }

@@ -143,7 +143,23 @@ pub enum Material {
     },
 }
 
+/// The most weighted BSDFs one material may flatten to (its leaves, and a mask's pass-through);
+/// the Mitsuba builder refuses more.
+pub const MAX_COMPONENTS: usize = 8;
+
 impl Material {
+    /// The number of weighted BSDFs the material flattens to: its leaves, a mask's pass-through
+    /// counting as one (0 for the course's material).
+    pub fn component_count(&self) -> usize {
+        match self {
+            Material::Course(_) => 0,
+            Material::TwoSided { front, back } => front.component_count() + back.component_count(),
+            Material::Mask { material, .. } => material.component_count() + 1,
+            Material::Blend { first, second, .. } => first.component_count() + second.component_count(),
+            _ => 1,
+        }
+    }
+
     /// The course material, or `None` for a physically based one.
     #[inline]
     pub fn as_course(&self) -> Option<&CourseMaterial> {

@@ -9,8 +9,9 @@
 //! a z-score (with a floor of 1e-4 of the block's value on the noise, the output's precision); a block fails when `|z| > 5` (a false alarm once in 1.7 million tests for normal
 //! noise: over the ~40 scenes of the full set and their ~320 block channels each, one false alarm
 //! in about 130 runs). Blocks dark in both images (under 1e-3) are not tested. The whole image's
-//! mean must also agree within 1% per channel (unless the difference is within three standard
-//! deviations of the two renders' noise, which a scene of small bright lights can have).
+//! mean must also agree within 1% per channel (unless the difference is within 4.5 standard
+//! deviations of the two renders' noise, which a scene of small bright lights or glass can have
+//! at these sample counts).
 //!
 //! A failing scene names its worst blocks and writes both images and their difference under
 //! `target/test-output/mitsuba/`. Mitsuba's renders are cached under `target/mitsuba-reference/`,
@@ -48,8 +49,12 @@ const FLOOR: f64 = 1e-3;
 /// A relative difference always allowed (the output's single precision, and pixels whose every
 /// sample is the same, such as an emitter seen directly, whose halves estimate no noise).
 const PRECISION: f64 = 1e-4;
-/// Largest relative difference of the whole image's mean.
+/// Largest relative difference of the whole image's mean...
 const WHOLE_TOLERANCE: f64 = 0.01;
+/// ...unless it is within this many standard deviations of the renders' noise (one test per
+/// channel and scene: a false alarm once in 150,000 for normal noise; glass and small lights
+/// have heavier tails, which two halves estimate low).
+const WHOLE_Z_LIMIT: f64 = 4.5;
 
 /// The scenes compared in CI: every supported BSDF, emitter, shape, texture and integrator
 /// appears in at least one.
@@ -81,7 +86,9 @@ const KNOWN_DIFFERENCES: [(&str, &str); 1] = [(
     "bsdf_blendbsdf",
     "Mitsuba renders a `blendbsdf` that holds a smooth (delta) BSDF darker than the blend of its two \
      BSDFs (a rough plastic and a smooth conductor at weight 0.5 give 0.179 in red where each alone \
-     gives 0.087 and 0.476); with two rough BSDFs it renders the blend, as rayterra does always",
+     gives 0.087 and 0.476): its blend samples with the chosen BSDF's own density, which its path \
+     tracer's MIS then mixes with the blend's; with two rough BSDFs it renders the blend, as \
+     rayterra always does",
 )];
 
 /// Defines some documentation scenes need (they are written for Mitsuba's docs generator).
@@ -300,7 +307,8 @@ fn mitsuba_scenes_render_as_mitsuba_renders_them() {
             o.whole_z[2]
         );
         // The mean agrees within 1%, or the two renders cannot tell it apart from noise.
-        let whole_ok = (0..3).all(|c| o.whole[c].abs() <= WHOLE_TOLERANCE || o.whole_z[c].abs() <= 3.0);
+        let whole_ok =
+            (0..3).all(|c| o.whole[c].abs() <= WHOLE_TOLERANCE || o.whole_z[c].abs() <= WHOLE_Z_LIMIT);
         if !o.failures.is_empty() || !whole_ok {
             let dir = write_evidence(&name, &a, &b);
             failed.push(format!(

@@ -1492,38 +1492,3 @@ fn degenerate_directions_give_finite_non_negative_values() {
         }
     }
 }
-
-#[test]
-#[ignore]
-fn debug_sizes_and_speed() {
-    println!(
-        "PhysicalBsdf {} bytes, Component {} bytes",
-        std::mem::size_of::<PhysicalBsdf>(),
-        std::mem::size_of::<Component>()
-    );
-    for (name, m) in [
-        ("diffuse", Material::Diffuse { reflectance: c(0.5) }),
-        ("roughconductor ggx", mitsuba_material("roughconductor_ggx")),
-        ("roughconductor beckmann", mitsuba_material("roughconductor_beckmann")),
-        ("roughdielectric ggx", mitsuba_material("roughdielectric_ggx")),
-        ("roughplastic ggx", mitsuba_material("roughplastic_ggx")),
-        ("blend", mitsuba_material("blend")),
-    ] {
-        let _ = build(&m);
-        let mut rng = Pcg64Mcg::seed_from_u64(1);
-        let n = 1_000_000;
-        let t = std::time::Instant::now();
-        let mut acc = 0.0;
-        for _ in 0..n {
-            let b = build(&m);
-            let wo = dir(40.0, 10.0);
-            if let Some(s) = b.sample(wo, rng.random(), rng.random(), rng.random()) {
-                acc += s.weight.x + b.eval(wo, s.wi).x + b.pdf(wo, s.wi);
-            }
-        }
-        println!(
-            "{name}: {:.0} ns per build + sample + eval + pdf ({acc:.1})",
-            t.elapsed().as_nanos() as f64 / n as f64
-        );
-    }
-}

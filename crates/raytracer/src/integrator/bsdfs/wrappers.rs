@@ -17,9 +17,9 @@ use glam::DVec3;
 use super::{Lobe, leaf_lobe};
 use crate::material::{Material, Param};
 
-/// The most components a [`super::PhysicalBsdf`] holds; the scene builder should refuse
-/// materials with more ([`component_count`]): the surplus would be dropped (made black).
-pub const MAX_COMPONENTS: usize = 8;
+/// The most components a [`super::PhysicalBsdf`] holds: the scene builder refuses materials
+/// with more ([`Material::component_count`]).
+pub const MAX_COMPONENTS: usize = crate::material::MAX_COMPONENTS;
 
 /// The side of the surface on which `wo` must lie for a component to act.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,16 +74,9 @@ impl Component {
     }
 }
 
-/// The number of components `material` flattens to (before dropping those of weight 0), for
-/// the scene builder to refuse more than [`MAX_COMPONENTS`].
+/// The number of components `material` flattens to ([`Material::component_count`]).
 pub fn component_count(material: &Material) -> usize {
-    match material {
-        Material::Course(_) => 0,
-        Material::TwoSided { front, back } => component_count(front) + component_count(back),
-        Material::Mask { material, .. } => component_count(material) + 1,
-        Material::Blend { first, second, .. } => component_count(first) + component_count(second),
-        _ => 1,
-    }
+    material.component_count()
 }
 
 /// The frame a subtree is reached in: its weight, the side `wo` must be on (in the BSDF's

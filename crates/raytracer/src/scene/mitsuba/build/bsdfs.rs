@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use super::super::{Plugin, PluginKind, Value};
 use super::{Builder, Props, metal_ior, named_ior};
-use crate::material::{Coating, Distribution, Interface, Material, Metal, Microfacet, Param};
+use crate::material::{Coating, Distribution, Interface, MAX_COMPONENTS, Material, Metal, Microfacet, Param};
 use crate::scene::Diagnostic;
 
 /// Mitsuba's default inside index of dielectrics (`bk7`).
@@ -23,6 +23,12 @@ impl<'a> Builder<'a> {
         }
         let props = Props::new(self.doc, plugin);
         let m = Arc::new(self.bsdf(&props)?);
+        if m.component_count() > MAX_COMPONENTS {
+            return Err(props.error(format!(
+                "this BSDF nests {} BSDFs (through twosided, mask and blendbsdf); rayterra renders at most {MAX_COMPONENTS}",
+                m.component_count()
+            )));
+        }
         self.finish(&props);
         self.materials.insert(key, m.clone());
         Ok(m)
