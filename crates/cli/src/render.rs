@@ -401,7 +401,7 @@ pub fn run(args: RenderArgs) -> Result<(), ExitCode> {
     if args.check {
         if !args.quiet {
             let scene = &prepared.scene;
-            let (primitives, lights) = (scene.primitives.len(), scene.lights.len());
+            let (primitives, lights) = (scene.primitives.len(), scene.lights.len() + scene.emitters.len());
             outln!(
                 "{}: ok ({primitives} primitive{}, {lights} light{}, {}x{} pixels, {} model)",
                 source.name(),
