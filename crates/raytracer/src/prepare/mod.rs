@@ -175,7 +175,9 @@ impl PreparedScene {
             .filter(|(_, p)| !p.shape.is_bounded())
             .map(|(i, _)| i as u32)
             .collect();
-        let bvh_items = if prims.len() - linear.len() <= FLAT_LIMIT {
+        // A mesh is a tree walk of its own: a loop over meshes would start every one of them.
+        let has_mesh = prims.iter().any(|p| matches!(p.shape, Shape::Mesh(_)));
+        let bvh_items = if prims.len() - linear.len() <= FLAT_LIMIT && !has_mesh {
             linear = (0..prims.len() as u32).collect();
             0
         } else {
