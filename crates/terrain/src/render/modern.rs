@@ -60,7 +60,7 @@ impl ModernLook {
     ) -> Result<Self, RenderError> {
         let device = context.device;
         let faces = SkyFaces::new(context, world.clear_sky())?;
-        let lighting = Lighting::new(device, world.clear_sky(), &faces.view);
+        let lighting = Lighting::new(device);
         let reflection_context = PassContext { target_format: REFLECTION_FORMAT, ..*context };
         let sky = SkyPass::modern(
             context,
@@ -158,14 +158,11 @@ impl Renderer {
     pub(super) fn prepare_modern(&mut self, gpu: &super::Gpu, size: (u32, u32), time_seconds: f64) -> bool {
         let settings: &Settings = &self.settings;
         let (Some(modern), Some(grid)) = (&mut self.modern, &mut self.grid) else { return false };
-        let sun = settings.sun.direction();
+        let sky = modern.lighting.update_sky(&gpu.queue, settings.sun_direction(), settings.sun.intensity);
+        // The light that casts shadows: the sun, or the moon at night.
+        let sun = sky.key_direction;
         let shadow_matrix = sun_matrix(sun, modern.bounds.0, modern.bounds.1);
-        let inputs = SceneInputs {
-            time_seconds,
-            frame_size: size,
-            shadow_matrix,
-            sky_light: modern.lighting.sky_light,
-        };
+        let inputs = SceneInputs { time_seconds, frame_size: size, shadow_matrix, sky };
         let uniforms = SceneUniforms::new(settings, &self.config, &inputs);
         gpu.queue.write_buffer(&modern.lighting.buffer, 0, bytemuck::bytes_of(&uniforms));
         // The reflection, at the settings' fraction of the frame.

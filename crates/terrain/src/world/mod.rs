@@ -5,6 +5,7 @@
 //! Nothing here touches the GPU: every function is pure and unit-tested.
 
 pub mod assets;
+pub mod atmosphere;
 pub mod chunk;
 pub mod dem;
 pub mod erosion;
