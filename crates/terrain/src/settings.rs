@@ -264,6 +264,43 @@ impl Default for TerrainSettings {
     }
 }
 
+/// The ground's materials (modern look): rock on cliffs, scree below them, grass and soil on
+/// gentle slopes (the colour map's colours, darker soil where water gathers), sand on the shores
+/// and snow high up, chosen by slope, height, curvature, aspect and the erosion's flow, blended by
+/// their own relief and projected from three sides where the ground is steep.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GroundSettings {
+    /// Materials from the land's shape (off: the colour map with the detail map, as before).
+    pub materials: bool,
+    /// The slope in degrees where bare rock takes over (10 to 80).
+    pub rock_slope_degrees: f32,
+    /// The snow line, as a fraction of the land's highest point above the water (0 to 1.5; over
+    /// 1, no snow). Lower on slopes facing north (-z), none on the steepest.
+    pub snow_line: f32,
+    /// How high above the water the shore's sand reaches, as a fraction of the land's highest
+    /// point (0 to 0.5).
+    pub sand_line: f32,
+    /// The strength of the materials' relief on the light (detail normals, 0 to 2).
+    pub detail: f32,
+    /// The size of the materials' grain: world units one tile of their texture spans, as a
+    /// fraction of the terrain's side (0.002 to 0.5).
+    pub texture_size: f32,
+}
+
+impl Default for GroundSettings {
+    fn default() -> Self {
+        Self {
+            materials: true,
+            rock_slope_degrees: 38.0,
+            snow_line: 0.72,
+            sand_line: 0.035,
+            detail: 1.0,
+            texture_size: 0.03,
+        }
+    }
+}
+
 /// A camera and a time, saved so that a screenshot can be taken again exactly. Every key is
 /// optional: a missing one takes the course's start (see [`Default`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -321,6 +358,8 @@ pub struct Settings {
     pub water: WaterSettings,
     /// The land's geometry.
     pub terrain: TerrainSettings,
+    /// The ground's materials.
+    pub ground: GroundSettings,
     /// A saved camera and time (written by the window's panel; `--screenshot` uses it unless
     /// the command line gives its own).
     pub view: Option<ViewSettings>,
@@ -400,6 +439,11 @@ impl Settings {
             ("water.wave_scale", f(self.water.wave_scale), 0.1, 20.0),
             ("water.wave_strength", f(self.water.wave_strength), 0.0, 2.0),
             ("terrain.lod_error_pixels", f(self.terrain.lod_error_pixels), 0.5, 16.0),
+            ("ground.rock_slope_degrees", f(self.ground.rock_slope_degrees), 10.0, 80.0),
+            ("ground.snow_line", f(self.ground.snow_line), 0.0, 1.5),
+            ("ground.sand_line", f(self.ground.sand_line), 0.0, 0.5),
+            ("ground.detail", f(self.ground.detail), 0.0, 2.0),
+            ("ground.texture_size", f(self.ground.texture_size), 0.002, 0.5),
         ];
         let colour_keys = [
             ["sun.colour[0]", "sun.colour[1]", "sun.colour[2]"],

@@ -33,6 +33,8 @@ pub struct SceneUniforms {
     sky_box: [f32; 4],
     sky_sun: [f32; 4],
     sun_disc: [f32; 4],
+    ground: [f32; 4],
+    ground_scale: [f32; 4],
 }
 
 /// What the scene uniforms are computed from, besides the settings.
@@ -105,6 +107,9 @@ impl SceneUniforms {
             DVec2::new(travel.x * 0.6 - travel.y * 0.8, travel.x * 0.8 + travel.y * 0.6) * 1.37 * 0.8;
         let wrap = |v: f64| v.rem_euclid(1.0) as f32;
         let box_size = config.sky_box_size;
+        let ground = &settings.ground;
+        // The land's highest point above the water (world units).
+        let top = config.height_of_level(255.0).max(1e-3);
         Self {
             sun_direction: sky.key_direction.extend(flag(sun.lighting)).to_array(),
             sun_colour: key_colour.extend(flag(sun.lighting && sun.shadows)).to_array(),
@@ -133,6 +138,13 @@ impl SceneUniforms {
             sky_box: [box_size.x / 2.0, box_size.y, box_size.z / 2.0, 1.0 / SHADOW_MAP_SIZE as f32],
             sky_sun: sky.sun_direction.extend(sky.daylight).to_array(),
             sun_disc: disc.extend(sky.night).to_array(),
+            ground: [
+                flag(ground.materials),
+                1.0 - ground.rock_slope_degrees.to_radians().cos(),
+                ground.snow_line * top,
+                ground.sand_line * top,
+            ],
+            ground_scale: [1.0 / (ground.texture_size * config.terrain_length), ground.detail, top, 0.0],
         }
     }
 }

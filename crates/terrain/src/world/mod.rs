@@ -10,6 +10,7 @@ pub mod chunk;
 pub mod dem;
 pub mod erosion;
 pub mod export;
+pub mod ground;
 pub mod heightfield;
 pub mod heightmap;
 pub mod mesh;
