@@ -240,6 +240,7 @@ fn breakdown(gpu: &Gpu, world: &World, config: &SceneConfig) {
         s.water.foam = false;
     });
     with("no fog", |s| s.fog.enabled = false);
+    with("ground materials off", |s| s.ground.materials = false);
     with("unlit", |s| s.sun.lighting = false);
     with("LOD error 4 px", |s| s.terrain.lod_error_pixels = 4.0);
     with("course look", |s| s.look = Look::Course);

@@ -1,6 +1,6 @@
-//! The tuning panel (egui), toggled in the window with F1: the look, the sun, the fog, the water,
-//! the level of detail and wireframe, a graph of the last frames' times, and saving or loading
-//! the settings file. It edits a [`Settings`] in place; the window applies the changes.
+//! The tuning panel (egui), toggled in the window with F1: the look, the time of day, the sun,
+//! the fog, the water, the ground's materials, the level of detail and wireframe, a graph of the
+//! last frames' times, and saving or loading the settings file. It edits a [`Settings`] in place; the window applies the changes.
 
 use std::collections::VecDeque;
 use std::path::Path;
@@ -87,6 +87,7 @@ impl Panel {
                 ui.add_enabled_ui(modern, |ui| sun(ui, settings));
                 ui.add_enabled_ui(modern, |ui| fog(ui, settings));
                 ui.add_enabled_ui(modern, |ui| water(ui, settings));
+                ui.add_enabled_ui(modern, |ui| ground(ui, settings));
                 egui::CollapsingHeader::new("Terrain").default_open(true).show(ui, |ui| {
                     ui.add(
                         egui::Slider::new(&mut settings.terrain.lod_error_pixels, 0.5..=16.0)
@@ -226,6 +227,24 @@ fn fog(ui: &mut egui::Ui, settings: &mut Settings) {
         ui.checkbox(&mut fog.enabled, "Fog");
         ui.add(egui::Slider::new(&mut fog.density, 0.0..=0.3).logarithmic(true).text("density"));
         ui.add(egui::Slider::new(&mut fog.height_falloff, 0.0..=5.0).text("height falloff"));
+    });
+}
+
+fn ground(ui: &mut egui::Ui, settings: &mut Settings) {
+    egui::CollapsingHeader::new("Ground").default_open(false).show(ui, |ui| {
+        let ground = &mut settings.ground;
+        ui.checkbox(&mut ground.materials, "Materials from the land's shape");
+        ui.add_enabled_ui(ground.materials, |ui| {
+            ui.add(egui::Slider::new(&mut ground.rock_slope_degrees, 10.0..=80.0).text("rock slope (°)"));
+            ui.add(egui::Slider::new(&mut ground.snow_line, 0.0..=1.5).text("snow line"));
+            ui.add(egui::Slider::new(&mut ground.sand_line, 0.0..=0.5).text("sand line"));
+            ui.add(egui::Slider::new(&mut ground.detail, 0.0..=2.0).text("detail"));
+            ui.add(
+                egui::Slider::new(&mut ground.texture_size, 0.002..=0.5)
+                    .logarithmic(true)
+                    .text("texture size"),
+            );
+        });
     });
 }
 
