@@ -53,7 +53,13 @@ fn main() {
         ROUNDS * FRAMES_PER_ROUND
     );
     let config = SceneConfig::default();
-    let course_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/course-assets/terrain");
+    // Beside the repository, or in the nearest folder above it (a git worktree in a subfolder).
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let course_dir = manifest
+        .ancestors()
+        .map(|dir| dir.join("shared/course-assets/terrain"))
+        .find(|dir| dir.is_dir())
+        .unwrap_or_else(|| manifest.join("../../../shared/course-assets/terrain"));
     let quick = std::env::var("RAYTERRA_BENCH_QUICK").is_ok_and(|v| v == "1");
     let mut scenes = vec![("course-island-256", Scene::Course), ("procedural-512", Scene::Procedural(512))];
     if !quick {

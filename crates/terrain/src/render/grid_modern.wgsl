@@ -46,7 +46,10 @@ fn relief(weight: f32, height: f32) -> f32 {
     return select(-1.0, weight + 0.6 * height, weight > 0.002);
 }
 
-fn shade(in: LitGridVertex) -> vec4<f32> {
+// `full`: the land as seen directly (a constant at each call: the reflection, seen through waves
+// at a fraction of the frame's size, takes its materials from above only, without their relief
+// on the light).
+fn shade(in: LitGridVertex, full: bool) -> vec4<f32> {
     let colour = textureSample(colour_map, edge_clamp, in.uv).rgb;
     let detail = textureSample(detail_map, wrap, in.uv * grid.detail_repeat).rgb;
     let light = textureSample(light_map, edge_clamp, in.uv).rg;
@@ -66,12 +69,19 @@ fn shade(in: LitGridVertex) -> vec4<f32> {
     let facing2 = facing * facing;
     let sharp = facing2 * facing2;
     let planes = sharp / (sharp.x + sharp.y + sharp.z);
-    let from_top = textureSample(material_noise, noise_wrap, p.xz);
-    let from_x = textureSample(material_noise, noise_wrap, vec2<f32>(p.z, -p.y));
-    let from_z = textureSample(material_noise, noise_wrap, vec2<f32>(p.x, -p.y));
-    let noise = from_top * planes.y + from_x * planes.x + from_z * planes.z;
-    // Patches at a coarser scale, from above.
-    let broad = textureSample(material_noise, noise_wrap, p.xz * 0.125).g;
+    // Gradients taken here, where every fragment of a quad runs, for the samples in branches.
+    let dp_dx = dpdx(p);
+    let dp_dy = dpdy(p);
+    let from_top = textureSampleGrad(material_noise, noise_wrap, p.xz, dp_dx.xz, dp_dy.xz);
+    var noise = from_top;
+    // The sides only where the ground is steep enough to show them (most of it is not).
+    if (full && planes.y < 0.98) {
+        let from_x = textureSampleGrad(material_noise, noise_wrap, vec2<f32>(p.z, -p.y), vec2<f32>(dp_dx.z, -dp_dx.y), vec2<f32>(dp_dy.z, -dp_dy.y));
+        let from_z = textureSampleGrad(material_noise, noise_wrap, vec2<f32>(p.x, -p.y), vec2<f32>(dp_dx.x, -dp_dx.y), vec2<f32>(dp_dy.x, -dp_dy.y));
+        noise = from_top * planes.y + from_x * planes.x + from_z * planes.z;
+    }
+    // Patches at a coarser scale: the detail map, repeated a few times over the terrain.
+    let broad = detail.g;
 
     // Each material's share from the land's shape.
     let slope = 1.0 - normal.y;
@@ -81,7 +91,8 @@ fn shade(in: LitGridVertex) -> vec4<f32> {
     let rock = smoothstep(rock_slope * 0.85, rock_slope * 1.15, slope + 0.12 * rock_slope * (broad - 0.5));
     // Scree: the moderately steep hollows below the cliffs.
     let scree = smoothstep(rock_slope * 0.35, rock_slope * 0.7, slope) * smoothstep(-0.05, 0.35, curvature) * (1.0 - rock);
-    let sand = (1.0 - smoothstep(scene.ground.w * 0.7, scene.ground.w * 1.3, height + 0.02 * top * (broad - 0.5)))
+    let band = 0.3 * abs(scene.ground.w) + 1e-4;
+    let sand = (1.0 - smoothstep(scene.ground.w - band, scene.ground.w + band, height + 0.02 * top * (broad - 0.5)))
         * (1.0 - smoothstep(0.1, 0.25, slope));
     // The snow line drops on slopes facing north (-z) and with the patches; steep slopes shed it.
     let line = scene.ground.z + 0.12 * top * normal.z + 0.08 * top * (broad - 0.5);
@@ -122,14 +133,13 @@ fn shade(in: LitGridVertex) -> vec4<f32> {
 
     // Detail normals: the relief's gradient across the surface from its screen derivatives
     // (Mikkelsen, "Bump Mapping Unparametrized Surfaces on the GPU", 2010).
-    let amplitude = scene.ground_scale.y * 0.04 / scene.ground_scale.x;
-    let dp_dx = dpdx(in.world);
-    let dp_dy = dpdy(in.world);
+    // (dp_dx, dp_dy of `p` are the world position's, scaled alike: the scale cancels.)
+    let amplitude = select(0.0, scene.ground_scale.y * 0.04, full);
     let r1 = cross(dp_dy, normal);
     let r2 = cross(normal, dp_dx);
     let det = dot(dp_dx, r1);
     let gradient = sign(det) * (dpdx(bump) * r1 + dpdy(bump) * r2) * amplitude;
-    let detailed = normalize(abs(det) * normal - gradient + vec3<f32>(0.0, 1e-9, 0.0));
+    let detailed = normalize(abs(det) * normal - gradient + vec3<f32>(0.0, 1e-12, 0.0));
     // The light map's sun term is for the smooth normal: rescale it for the detailed one.
     let key = scene.sun_direction.xyz;
     let relit = clamp(max(dot(detailed, key), 0.0) / max(dot(normal, key), 0.12), 0.0, 2.0);
@@ -143,13 +153,13 @@ fn shade(in: LitGridVertex) -> vec4<f32> {
 
 @fragment
 fn fs_main(in: LitGridVertex) -> @location(0) vec4<f32> {
-    return shade(in);
+    return shade(in, true);
 }
 
 // The mirrored land seen in the water: nothing that is under the water.
 @fragment
 fn fs_reflected(in: LitGridVertex) -> @location(0) vec4<f32> {
-    let colour = shade(in);
+    let colour = shade(in, false);
     // Shaded first: derivatives need every fragment of a quad.
     if (in.world.y < 0.0) {
         discard;

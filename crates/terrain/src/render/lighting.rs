@@ -67,6 +67,9 @@ pub struct SkySummary {
     pub night: f32,
     /// How bright the scene is against a sunny day (0.05 to 1).
     pub daylight: f32,
+    /// The sky's mean colour along the horizon (stored values, 0..=1): where no land or water
+    /// is drawn below it, the frame shows this.
+    pub horizon: Vec3,
 }
 
 impl From<&SkyLight> for SkySummary {
@@ -79,6 +82,11 @@ impl From<&SkyLight> for SkySummary {
             sky_light: sky.sky_light,
             night: sky.night,
             daylight: sky.daylight,
+            horizon: sky.texels[..SKY_VIEW_WIDTH as usize]
+                .iter()
+                .map(|t| Vec3::new(f32::from(t[0]), f32::from(t[1]), f32::from(t[2])) / 255.0)
+                .sum::<Vec3>()
+                / SKY_VIEW_WIDTH as f32,
         }
     }
 }
@@ -142,7 +150,8 @@ impl SceneUniforms {
                 flag(ground.materials),
                 1.0 - ground.rock_slope_degrees.to_radians().cos(),
                 ground.snow_line * top,
-                ground.sand_line * top,
+                // No shore without a sea.
+                if config.sea { ground.sand_line * top } else { -1e4 },
             ],
             ground_scale: [1.0 / (ground.texture_size * config.terrain_length), ground.detail, top, 0.0],
         }

@@ -41,7 +41,7 @@ struct Scene {
     // The sun's disc colour (stored values), w: 0 by day to 1 at night (the moon's disc).
     sun_disc: vec4<f32>,
     // The ground's materials: x: 1 when on, y: 1 - cos(the rock's slope), z: the snow line and
-    // w: the sand line (world y).
+    // w: the sand line (world y; far below the land without a sea).
     ground: vec4<f32>,
     // x: 1 / world units a tile of the material noise spans, y: the detail normals' strength,
     // z: the land's highest point (world y), w: unused.

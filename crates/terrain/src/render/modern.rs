@@ -182,6 +182,17 @@ impl Renderer {
         let settings: &Settings = &self.settings;
         let (Some(modern), Some(grid)) = (&mut self.modern, &mut self.grid) else { return false };
         let sky = modern.lighting.update_sky(&gpu.queue, settings.sun_direction(), settings.sun.intensity);
+        if !self.config.sea {
+            // Below the horizon, where no land is drawn, the frame shows the horizon's colour
+            // (as `frame::clear_colour` does for a painted sky).
+            let linear = |c: f32| super::frame::srgb_to_linear(f64::from(c));
+            self.clear = wgpu::Color {
+                r: linear(sky.horizon.x),
+                g: linear(sky.horizon.y),
+                b: linear(sky.horizon.z),
+                a: 1.0,
+            };
+        }
         // The light that casts shadows: the sun, or the moon at night.
         let sun = sky.key_direction;
         let shadow_matrix = sun_matrix(sun, modern.bounds.0, modern.bounds.1);
