@@ -23,6 +23,12 @@ struct LitGridVertex {
     @location(1) uv: vec2<f32>,
     // The horizon's colour and the fog's amount (see `aerial`).
     @location(2) aerial: vec4<f32>,
+    // The land's smooth normal here (from the shape map).
+    @location(3) normal: vec3<f32>,
+    // The materials' shares from the land's shape: rock, scree, sand, snow (grass the rest).
+    @location(4) shares: vec4<f32>,
+    // Where water gathers (the erosion's flow and hollows), 0 to 1.
+    @location(5) wet: f32,
 }
 
 @vertex
@@ -36,6 +42,32 @@ fn vs_lit(@location(0) corner: vec4<u32>, @location(1) node: vec4<u32>) -> LitGr
     // In the mirror image the light travels from the point to the water and up to the eye.
     let seen = vec3<f32>(world.x, world.y * frame.y_sign, world.z);
     out.aerial = aerial(eye, world, length(seen - eye));
+    // The land's shape and the materials' shares change slowly across the ground: worked out per
+    // vertex (the nearest patches have a vertex per heightmap sample).
+    let shape = textureSampleLevel(ground_map, edge_clamp, out.uv, 0.0);
+    let nxz = shape.rg * 2.0 - vec2<f32>(1.0);
+    let normal = normalize(vec3<f32>(nxz.x, sqrt(max(1.0 - dot(nxz, nxz), 0.0)), nxz.y));
+    let curvature = shape.b * 2.0 - 1.0;
+    let flow = shape.a;
+    // Patches at a coarser scale: the detail map, repeated a few times over the terrain.
+    let broad = textureSampleLevel(detail_map, wrap, out.uv * grid.detail_repeat, 0.0).g;
+    let slope = 1.0 - normal.y;
+    let height = world.y;
+    let rock_slope = scene.ground.y;
+    let top = scene.ground_scale.z;
+    let rock = smoothstep(rock_slope * 0.85, rock_slope * 1.15, slope + 0.12 * rock_slope * (broad - 0.5));
+    // Scree: the moderately steep hollows below the cliffs.
+    let scree = smoothstep(rock_slope * 0.35, rock_slope * 0.7, slope) * smoothstep(-0.05, 0.35, curvature) * (1.0 - rock);
+    let band = 0.3 * abs(scene.ground.w) + 1e-4;
+    let sand = (1.0 - smoothstep(scene.ground.w - band, scene.ground.w + band, height + 0.02 * top * (broad - 0.5)))
+        * (1.0 - smoothstep(0.1, 0.25, slope));
+    // The snow line drops on slopes facing north (-z) and with the patches; steep slopes shed it.
+    let line = scene.ground.z + 0.12 * top * normal.z + 0.08 * top * (broad - 0.5);
+    let snow = smoothstep(line - 0.03 * top, line + 0.03 * top, height)
+        * (1.0 - smoothstep(rock_slope * 1.1, rock_slope * 1.6, slope));
+    out.normal = normal;
+    out.shares = vec4<f32>(rock * (1.0 - snow), scree * (1.0 - snow), sand * (1.0 - rock) * (1.0 - snow), snow);
+    out.wet = clamp(flow * 1.2 + 0.3 * max(curvature, 0.0), 0.0, 1.0);
     return out;
 }
 
@@ -55,53 +87,25 @@ fn shade(in: LitGridVertex, full: bool) -> vec4<f32> {
     let light = textureSample(light_map, edge_clamp, in.uv).rg;
     let plain = clamp(colour + detail - vec3<f32>(0.5), vec3<f32>(0.0), vec3<f32>(1.0));
 
-    // The land's shape here.
-    let shape = textureSample(ground_map, edge_clamp, in.uv);
-    let nxz = shape.rg * 2.0 - vec2<f32>(1.0);
-    let normal = normalize(vec3<f32>(nxz.x, sqrt(max(1.0 - dot(nxz, nxz), 0.0)), nxz.y));
-    let curvature = shape.b * 2.0 - 1.0;
-    let flow = shape.a;
-
-    // The noise seen from above and from the two sides, weighted by how much the ground faces
-    // each: no stretching on cliffs.
+    let normal = normalize(in.normal);
+    // The noise seen from above and from the side the ground faces most (x or z), weighted by
+    // how much the ground faces each: no stretching on cliffs ("biplanar" mapping, two samples
+    // where triplanar takes three).
     let p = in.world * scene.ground_scale.x;
     let facing = abs(normal);
-    let facing2 = facing * facing;
-    let sharp = facing2 * facing2;
-    let planes = sharp / (sharp.x + sharp.y + sharp.z);
-    // Gradients taken here, where every fragment of a quad runs, for the samples in branches.
+    let toward_x = facing.x > facing.z;
+    let side = max(facing.x, facing.z);
+    let weights = vec2<f32>(facing.y, side) * vec2<f32>(facing.y, side);
+    let planes = (weights * weights) / (weights.x * weights.x + weights.y * weights.y);
     let dp_dx = dpdx(p);
     let dp_dy = dpdy(p);
-    let from_top = textureSampleGrad(material_noise, noise_wrap, p.xz, dp_dx.xz, dp_dy.xz);
-    var noise = from_top;
-    // The sides only where the ground is steep enough to show them (most of it is not).
-    if (full && planes.y < 0.98) {
-        let from_x = textureSampleGrad(material_noise, noise_wrap, vec2<f32>(p.z, -p.y), vec2<f32>(dp_dx.z, -dp_dx.y), vec2<f32>(dp_dy.z, -dp_dy.y));
-        let from_z = textureSampleGrad(material_noise, noise_wrap, vec2<f32>(p.x, -p.y), vec2<f32>(dp_dx.x, -dp_dx.y), vec2<f32>(dp_dy.x, -dp_dy.y));
-        noise = from_top * planes.y + from_x * planes.x + from_z * planes.z;
-    }
-    // Patches at a coarser scale: the detail map, repeated a few times over the terrain.
-    let broad = detail.g;
-
-    // Each material's share from the land's shape.
-    let slope = 1.0 - normal.y;
-    let height = in.world.y;
-    let rock_slope = scene.ground.y;
-    let top = scene.ground_scale.z;
-    let rock = smoothstep(rock_slope * 0.85, rock_slope * 1.15, slope + 0.12 * rock_slope * (broad - 0.5));
-    // Scree: the moderately steep hollows below the cliffs.
-    let scree = smoothstep(rock_slope * 0.35, rock_slope * 0.7, slope) * smoothstep(-0.05, 0.35, curvature) * (1.0 - rock);
-    let band = 0.3 * abs(scene.ground.w) + 1e-4;
-    let sand = (1.0 - smoothstep(scene.ground.w - band, scene.ground.w + band, height + 0.02 * top * (broad - 0.5)))
-        * (1.0 - smoothstep(0.1, 0.25, slope));
-    // The snow line drops on slopes facing north (-z) and with the patches; steep slopes shed it.
-    let line = scene.ground.z + 0.12 * top * normal.z + 0.08 * top * (broad - 0.5);
-    let snow = smoothstep(line - 0.03 * top, line + 0.03 * top, height)
-        * (1.0 - smoothstep(rock_slope * 1.1, rock_slope * 1.6, slope));
-    let w_snow = snow;
-    let w_rock = rock * (1.0 - snow);
-    let w_scree = scree * (1.0 - snow);
-    let w_sand = sand * (1.0 - rock) * (1.0 - snow);
+    let from_top = textureSample(material_noise, noise_wrap, p.xz);
+    let from_side = textureSample(material_noise, noise_wrap, vec2<f32>(select(p.x, p.z, toward_x), -p.y));
+    let noise = select(from_top, from_top * planes.x + from_side * planes.y, full);
+    let w_rock = in.shares.x;
+    let w_scree = in.shares.y;
+    let w_sand = in.shares.z;
+    let w_snow = in.shares.w;
     let w_grass = max(1.0 - w_rock - w_scree - w_sand - w_snow, 0.0);
 
     // Height-based blending: each material's relief from the noise.
@@ -124,7 +128,7 @@ fn shade(in: LitGridVertex, full: bool) -> vec4<f32> {
     // Grass takes the colour map's colours; where water gathers (the erosion's flow) and in
     // hollows, darker soil shows.
     let soil = vec3<f32>(0.38, 0.30, 0.22) * (0.85 + 0.3 * noise.r);
-    let wet = clamp(flow * 1.2 + 0.3 * max(curvature, 0.0), 0.0, 1.0) * smoothstep(0.35, 0.65, noise.g + 0.3 * flow);
+    let wet = in.wet * smoothstep(0.35, 0.65, noise.g + 0.3 * in.wet);
     let grass_colour = mix(clamp(colour + (noise.r - 0.5) * 0.25, vec3<f32>(0.0), vec3<f32>(1.0)), soil, wet * 0.8);
     let sand_colour = vec3<f32>(0.78, 0.71, 0.54) * (0.92 + 0.16 * noise.r);
     let snow_colour = vec3<f32>(0.93, 0.95, 0.98) * (0.96 + 0.04 * noise.r);

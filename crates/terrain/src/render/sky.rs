@@ -81,9 +81,8 @@ impl SkyPass {
     }
 
     /// The modern look's sky box: the atmosphere's colours from `lighting` (group 2, with its
-    /// `layout`; `faces` are bound but unused), its walls reaching as far below the horizon as
-    /// above it (where no land or water is drawn, a DEM without a sea, the horizon's colour
-    /// shows). Its mirror image is drawn into the reflection, described by `reflection`.
+    /// `layout`; `faces` are bound but unused); without a sea its walls reach as far below the
+    /// horizon as above it (where no land is drawn, the horizon's colour shows). Its mirror image is drawn into the reflection, described by `reflection`.
     pub fn modern(
         context: &PassContext<'_>,
         reflection: &PassContext<'_>,
@@ -117,8 +116,9 @@ impl SkyPass {
             "sky",
             &[Binding::TextureArray(&faces.view), Binding::Sampler(&sampler(device, false))],
         );
-        // The modern look's sky (the one with lighting) reaches below the horizon.
-        let (vertices, indices) = box_mesh(config, lighting.is_some());
+        // The modern look's sky (the one with lighting) reaches below the horizon where no sea
+        // covers it.
+        let (vertices, indices) = box_mesh(config, lighting.is_some() && !config.sea);
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Uint32];
         let buffers = [wgpu::VertexBufferLayout {
             array_stride: size_of::<SkyVertex>() as u64,
