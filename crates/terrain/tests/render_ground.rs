@@ -1,6 +1,6 @@
 //! The modern look's ground on the software GPU: a cliff seen from the side shows its texture at
-//! the same grain as flat ground seen from above, not stretched down the slope (triplanar
-//! projection), while the colour map's top-down projection (materials off) does stretch it; and
+//! the same grain as flat ground seen from above, not stretched down the slope (the noise
+//! projected from the side too), while the colour map's top-down projection (materials off) does stretch it; and
 //! the materials follow the land (rock on the cliff, grass on the flat, snow high up).
 
 mod common;
