@@ -10,6 +10,7 @@ use terrain::controls;
 use terrain::headless::HeadlessRenderer;
 use terrain::render::{Backend, FrameView, Gpu, GpuMemory};
 use terrain::window::{self, Notice, WindowOptions};
+use terrain::world::atmosphere::TimeOfDay;
 use terrain::world::dem::{self, WaterLevel};
 use terrain::world::erosion::{self, ErosionParams};
 use terrain::world::procedural::{self, ProceduralOptions, Progress, Stage};
@@ -126,6 +127,29 @@ pub struct TerrainArgs {
     #[arg(long, value_name = "LOOK", value_parser = parse_look)]
     look: Option<Look>,
 
+    /// Time of day, local solar time HH:MM (12:00: the sun at its highest), modern look: puts
+    /// the sun in the sky for --latitude and --day-of-year, and the sky, the light and the fog
+    /// follow it (dawn, noon, dusk, night). Overrides the settings file's `[sky]`.
+    #[arg(long, value_name = "HH:MM", value_parser = parse_time_of_day)]
+    time_of_day: Option<TimeOfDay>,
+
+    /// Latitude of the place in degrees (-90 south to 90 north; the map's north is -z), with
+    /// --time-of-day. Default: 45 (or the settings file's).
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_latitude)]
+    latitude: Option<f32>,
+
+    /// Day of the year (1 = 1 January, to 366), with --time-of-day. Default: 172 (21 June).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=366))]
+    day_of_year: Option<u32>,
+
+    /// The sun's elevation in degrees above the horizon (-10 to 90), instead of a time of day.
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_sun_elevation)]
+    sun_elevation: Option<f32>,
+
+    /// The sun's compass azimuth in degrees (0 toward -z, 90 toward +x), instead of a time of day.
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_sun_azimuth)]
+    sun_azimuth: Option<f32>,
+
     /// Settings file (TOML): the look and every tunable of the modern look, and optionally a
     /// camera and time. Read at start; the window's panel (F1) saves to it. `--screenshot`
     /// renders with it (the command line's --camera, --fov, --time and --look win).
@@ -200,6 +224,32 @@ fn parse_strength(text: &str) -> Result<f32, String> {
 
 fn parse_look(text: &str) -> Result<Look, String> {
     text.parse()
+}
+
+fn parse_time_of_day(text: &str) -> Result<TimeOfDay, String> {
+    text.parse()
+}
+
+/// A number of degrees within `min..=max`, for `what`.
+fn parse_degrees(text: &str, what: &str, min: f32, max: f32) -> Result<f32, String> {
+    let degrees: f32 = text.parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if (min..=max).contains(&degrees) {
+        Ok(degrees)
+    } else {
+        Err(format!("{degrees} degrees is out of range: the {what} must be between {min} and {max}"))
+    }
+}
+
+fn parse_latitude(text: &str) -> Result<f32, String> {
+    parse_degrees(text, "latitude", -90.0, 90.0)
+}
+
+fn parse_sun_elevation(text: &str) -> Result<f32, String> {
+    parse_degrees(text, "sun's elevation", -10.0, 90.0)
+}
+
+fn parse_sun_azimuth(text: &str) -> Result<f32, String> {
+    parse_degrees(text, "sun's azimuth", -360.0, 720.0)
 }
 
 fn parse_pose(text: &str) -> Result<CameraPose, String> {
@@ -342,6 +392,27 @@ fn load_settings(args: &TerrainArgs) -> Result<Settings, String> {
     };
     if let Some(look) = args.look {
         settings.look = look;
+    }
+    if args.time_of_day.is_some() && (args.sun_elevation.is_some() || args.sun_azimuth.is_some()) {
+        return Err("--time-of-day places the sun itself: leave out --sun-elevation and --sun-azimuth".into());
+    }
+    if let Some(time) = args.time_of_day {
+        settings.sky.time_of_day = Some(time);
+    }
+    if let Some(latitude) = args.latitude {
+        settings.sky.latitude_degrees = latitude;
+    }
+    if let Some(day) = args.day_of_year {
+        settings.sky.day_of_year = day;
+    }
+    if args.sun_elevation.is_some() || args.sun_azimuth.is_some() {
+        settings.sky.time_of_day = None;
+    }
+    if let Some(elevation) = args.sun_elevation {
+        settings.sun.elevation_degrees = elevation;
+    }
+    if let Some(azimuth) = args.sun_azimuth {
+        settings.sun.azimuth_degrees = azimuth;
     }
     Ok(settings)
 }

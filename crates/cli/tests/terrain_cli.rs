@@ -85,6 +85,56 @@ fn malformed_options_are_usage_errors() {
     assert_fails(&rayterra(&["--fov", "0", "--screenshot", "x.png"]), 2, "field of view");
     assert_fails(&rayterra(&["--time", "nan", "--screenshot", "x.png"]), 2, "finite");
     assert_fails(&rayterra(&["--assets", "a", "--heightmap", "b.png"]), 2, "cannot be used with");
+    assert_fails(&rayterra(&["--time-of-day", "25:00", "--screenshot", "x.png"]), 2, "not a time of day");
+    assert_fails(&rayterra(&["--latitude", "91", "--screenshot", "x.png"]), 2, "latitude");
+    assert_fails(&rayterra(&["--day-of-year", "0", "--screenshot", "x.png"]), 2, "day-of-year");
+    assert_fails(&rayterra(&["--sun-elevation", "-20", "--screenshot", "x.png"]), 2, "sun's elevation");
+}
+
+/// The time of day on the command line gives the picture the settings file's `[sky]` gives, and
+/// cannot be mixed with a sun placed by hand.
+#[test]
+fn the_time_of_day_from_the_command_line_or_the_settings_file() {
+    let settings = scratch("dusk.toml");
+    std::fs::write(&settings, "[sky]\ntime_of_day = \"19:10\"\nlatitude_degrees = 52.0\nday_of_year = 100\n")
+        .expect("write");
+    let (from_file, from_options) = (scratch("dusk-file.png"), scratch("dusk-options.png"));
+    let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let common = ["--size", "48x27", "--grid", "32", "--backend", "vulkan"];
+    let mut first = vec!["--settings".to_string(), path(&settings), "--screenshot".into(), path(&from_file)];
+    first.extend(common.iter().map(|s| s.to_string()));
+    let output = rayterra(&first.iter().map(String::as_str).collect::<Vec<_>>());
+    if no_gpu(&output) {
+        return;
+    }
+    assert!(output.status.success(), "{}", stderr(&output));
+    let second_out = path(&from_options);
+    let mut second = vec![
+        "--time-of-day",
+        "19:10",
+        "--latitude",
+        "52",
+        "--day-of-year",
+        "100",
+        "--screenshot",
+        &second_out,
+    ];
+    second.extend(common);
+    let output = rayterra(&second);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(std::fs::read(&from_file).expect("first"), std::fs::read(&from_options).expect("second"));
+    // Noon is another picture.
+    let noon = path(&scratch("noon.png"));
+    let mut third =
+        vec!["--time-of-day", "12:00", "--latitude", "52", "--day-of-year", "100", "--screenshot", &noon];
+    third.extend(common);
+    assert!(rayterra(&third).status.success());
+    assert_ne!(std::fs::read(&noon).expect("noon"), std::fs::read(&from_options).expect("dusk"));
+    assert_fails(
+        &rayterra(&["--time-of-day", "12:00", "--sun-elevation", "10", "--screenshot", &noon]),
+        1,
+        "leave out --sun-elevation",
+    );
 }
 
 #[test]

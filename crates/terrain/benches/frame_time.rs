@@ -53,7 +53,13 @@ fn main() {
         ROUNDS * FRAMES_PER_ROUND
     );
     let config = SceneConfig::default();
-    let course_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/course-assets/terrain");
+    // Beside the repository, or in the nearest folder above it (a git worktree in a subfolder).
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let course_dir = manifest
+        .ancestors()
+        .map(|dir| dir.join("shared/course-assets/terrain"))
+        .find(|dir| dir.is_dir())
+        .unwrap_or_else(|| manifest.join("../../../shared/course-assets/terrain"));
     let quick = std::env::var("RAYTERRA_BENCH_QUICK").is_ok_and(|v| v == "1");
     let mut scenes = vec![("course-island-256", Scene::Course), ("procedural-512", Scene::Procedural(512))];
     if !quick {
@@ -240,6 +246,7 @@ fn breakdown(gpu: &Gpu, world: &World, config: &SceneConfig) {
         s.water.foam = false;
     });
     with("no fog", |s| s.fog.enabled = false);
+    with("ground materials off", |s| s.ground.materials = false);
     with("unlit", |s| s.sun.lighting = false);
     with("LOD error 4 px", |s| s.terrain.lod_error_pixels = 4.0);
     with("course look", |s| s.look = Look::Course);

@@ -23,6 +23,8 @@ pub enum Action {
     FullScreen,
     /// Show or hide the tuning panel.
     TogglePanel,
+    /// Let the day run (the time of day advances) or stop it.
+    ToggleDay,
     /// Quit.
     Quit,
 }
@@ -104,6 +106,12 @@ pub const BINDINGS: &[Binding] = &[
         action: Action::TogglePanel,
         effect: "show or hide the tuning panel (look, sun, fog, water, level of detail, frame times)",
     },
+    Binding {
+        keys: &[KeyCode::KeyT],
+        names: "T",
+        action: Action::ToggleDay,
+        effect: "let the day run or stop it (modern look; from noon without a time of day)",
+    },
     Binding { keys: &[KeyCode::Escape], names: "Esc", action: Action::Quit, effect: "quit" },
 ];
 
@@ -157,6 +165,7 @@ mod tests {
             (KeyCode::F12, Action::Screenshot),
             (KeyCode::KeyP, Action::Screenshot),
             (KeyCode::F1, Action::TogglePanel),
+            (KeyCode::KeyT, Action::ToggleDay),
         ];
         for (key, action) in expected {
             assert_eq!(action_for(key), Some(action), "{key:?}");

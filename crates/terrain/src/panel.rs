@@ -1,6 +1,6 @@
-//! The tuning panel (egui), toggled in the window with F1: the look, the sun, the fog, the water,
-//! the level of detail and wireframe, a graph of the last frames' times, and saving or loading
-//! the settings file. It edits a [`Settings`] in place; the window applies the changes.
+//! The tuning panel (egui), toggled in the window with F1: the look, the time of day, the sun,
+//! the fog, the water, the ground's materials, the level of detail and wireframe, a graph of the
+//! last frames' times, and saving or loading the settings file. It edits a [`Settings`] in place; the window applies the changes.
 
 use std::collections::VecDeque;
 use std::path::Path;
@@ -8,6 +8,7 @@ use std::path::Path;
 use egui::{Color32, RichText};
 
 use crate::settings::{Look, ReflectionQuality, Settings};
+use crate::world::atmosphere::{TimeOfDay, solar_position};
 
 /// Frames the frame-time graph shows.
 pub const GRAPH_FRAMES: usize = 240;
@@ -82,9 +83,11 @@ impl Panel {
                 });
                 self.graph(ui);
                 let modern = settings.look == Look::Modern;
+                ui.add_enabled_ui(modern, |ui| sky(ui, settings));
                 ui.add_enabled_ui(modern, |ui| sun(ui, settings));
                 ui.add_enabled_ui(modern, |ui| fog(ui, settings));
                 ui.add_enabled_ui(modern, |ui| water(ui, settings));
+                ui.add_enabled_ui(modern, |ui| ground(ui, settings));
                 egui::CollapsingHeader::new("Terrain").default_open(true).show(ui, |ui| {
                     ui.add(
                         egui::Slider::new(&mut settings.terrain.lod_error_pixels, 0.5..=16.0)
@@ -157,17 +160,63 @@ fn colour(ui: &mut egui::Ui, rgb: &mut [f32; 3]) {
     });
 }
 
+/// The time of day and the place. The time is written back only when the user moves it (a
+/// running day moves it too, between frames).
+fn sky(ui: &mut egui::Ui, settings: &mut Settings) {
+    egui::CollapsingHeader::new("Time of day").default_open(true).show(ui, |ui| {
+        let sky = &mut settings.sky;
+        let mut timed = sky.time_of_day.is_some();
+        if ui.checkbox(&mut timed, "Sun from the time of day").changed() {
+            sky.time_of_day = timed.then(|| TimeOfDay::from_hours(12.0));
+        }
+        ui.add_enabled_ui(timed, |ui| {
+            let mut hours = sky.time_of_day.map_or(12.0, TimeOfDay::hours);
+            let slider = egui::Slider::new(&mut hours, 0.0..=23.99)
+                .text("time")
+                .custom_formatter(|hours, _| TimeOfDay::from_hours(hours as f32).to_string());
+            if ui.add(slider).changed() {
+                sky.time_of_day = Some(TimeOfDay::from_hours(hours));
+            }
+            ui.add(egui::Slider::new(&mut sky.latitude_degrees, -90.0..=90.0).text("latitude (°)"));
+            ui.add(egui::Slider::new(&mut sky.day_of_year, 1..=366).text("day of the year"));
+            ui.horizontal(|ui| {
+                ui.checkbox(&mut sky.day_runs, "Day runs (T)");
+                ui.add(
+                    egui::Slider::new(&mut sky.day_hours_per_second, 0.01..=24.0)
+                        .logarithmic(true)
+                        .text("h/s"),
+                );
+            });
+            if let Some(time) = sky.time_of_day {
+                let sun = solar_position(time, sky.latitude_degrees, sky.day_of_year);
+                ui.label(
+                    RichText::new(format!(
+                        "sun {:.1}° up, azimuth {:.0}°",
+                        sun.elevation_degrees, sun.azimuth_degrees
+                    ))
+                    .small()
+                    .weak(),
+                );
+            }
+        });
+    });
+}
+
 fn sun(ui: &mut egui::Ui, settings: &mut Settings) {
+    let timed = settings.sky.time_of_day.is_some();
     egui::CollapsingHeader::new("Sun").default_open(true).show(ui, |ui| {
         let sun = &mut settings.sun;
         ui.horizontal(|ui| {
             ui.checkbox(&mut sun.lighting, "Lighting");
             ui.checkbox(&mut sun.shadows, "Shadows");
         });
-        ui.add(egui::Slider::new(&mut sun.elevation_degrees, -10.0..=90.0).text("elevation (°)"));
-        ui.add(egui::Slider::new(&mut sun.azimuth_degrees, 0.0..=360.0).text("azimuth (°)"));
+        ui.add_enabled(
+            !timed,
+            egui::Slider::new(&mut sun.elevation_degrees, -10.0..=90.0).text("elevation (°)"),
+        );
+        ui.add_enabled(!timed, egui::Slider::new(&mut sun.azimuth_degrees, 0.0..=360.0).text("azimuth (°)"));
         colour(ui, &mut sun.colour);
-        ui.add(egui::Slider::new(&mut sun.intensity, 0.0..=4.0).text("intensity"));
+        ui.add(egui::Slider::new(&mut sun.intensity, 0.0..=4.0).text("exposure"));
         ui.add(egui::Slider::new(&mut sun.ambient, 0.0..=2.0).text("sky light"));
     });
 }
@@ -178,6 +227,24 @@ fn fog(ui: &mut egui::Ui, settings: &mut Settings) {
         ui.checkbox(&mut fog.enabled, "Fog");
         ui.add(egui::Slider::new(&mut fog.density, 0.0..=0.3).logarithmic(true).text("density"));
         ui.add(egui::Slider::new(&mut fog.height_falloff, 0.0..=5.0).text("height falloff"));
+    });
+}
+
+fn ground(ui: &mut egui::Ui, settings: &mut Settings) {
+    egui::CollapsingHeader::new("Ground").default_open(false).show(ui, |ui| {
+        let ground = &mut settings.ground;
+        ui.checkbox(&mut ground.materials, "Materials from the land's shape");
+        ui.add_enabled_ui(ground.materials, |ui| {
+            ui.add(egui::Slider::new(&mut ground.rock_slope_degrees, 10.0..=80.0).text("rock slope (°)"));
+            ui.add(egui::Slider::new(&mut ground.snow_line, 0.0..=1.5).text("snow line"));
+            ui.add(egui::Slider::new(&mut ground.sand_line, 0.0..=0.5).text("sand line"));
+            ui.add(egui::Slider::new(&mut ground.detail, 0.0..=2.0).text("detail"));
+            ui.add(
+                egui::Slider::new(&mut ground.texture_size, 0.002..=0.5)
+                    .logarithmic(true)
+                    .text("texture size"),
+            );
+        });
     });
 }
 
@@ -236,5 +303,13 @@ mod tests {
         output.drop_without_applying_deltas();
         assert_eq!(settings, before);
         assert_eq!(requests, PanelRequests::default());
+        // With a time of day (its slider and the sun's place) too.
+        settings.sky.time_of_day = Some(TimeOfDay::from_hours(18.75));
+        let before = settings.clone();
+        let output = ctx.run_pass(egui::RawInput::default(), |ctx| {
+            requests = panel.show(ctx, &mut settings, Path::new("s.toml"), true);
+        });
+        output.drop_without_applying_deltas();
+        assert_eq!(settings, before);
     }
 }

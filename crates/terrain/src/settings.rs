@@ -14,6 +14,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::output::{SaveError, write_file};
+use crate::world::atmosphere::{TimeOfDay, solar_position};
 
 /// Largest settings file read, in bytes (a full one is about 1 KB).
 pub const MAX_SETTINGS_BYTES: u64 = 1 << 20;
@@ -109,11 +110,12 @@ pub struct SunSettings {
     pub elevation_degrees: f32,
     /// The sun's compass direction, in degrees: 0 toward -z, 90 toward +x.
     pub azimuth_degrees: f32,
-    /// The sun's colour, RGB 0..=1.
+    /// A tint on the sun's light, RGB 0..=1 (white: the atmosphere's colour as it is).
     pub colour: [f32; 3],
-    /// The sun's strength (0 to 4; 1 lights a surface facing it with its full albedo).
+    /// The exposure of the whole sky and its light (0 to 4; 1 lights a surface facing the sun
+    /// above the air with its full albedo).
     pub intensity: f32,
-    /// The strength of the light from the sky dome (0 to 2).
+    /// The strength of the light from the sky dome (0 to 2; 1: the atmosphere's as it is).
     pub ambient: f32,
     /// Shadows cast by the land on itself.
     pub shadows: bool,
@@ -126,9 +128,9 @@ impl Default for SunSettings {
             lighting: true,
             elevation_degrees: 25.0,
             azimuth_degrees: 305.0,
-            colour: [1.0, 0.95, 0.86],
+            colour: [1.0, 1.0, 1.0],
             intensity: 1.15,
-            ambient: 0.45,
+            ambient: 1.0,
             shadows: true,
         }
     }
@@ -137,8 +139,51 @@ impl Default for SunSettings {
 impl SunSettings {
     /// Unit vector toward the sun (y-up).
     pub fn direction(&self) -> Vec3 {
-        let (azimuth, elevation) = (self.azimuth_degrees.to_radians(), self.elevation_degrees.to_radians());
-        Vec3::new(azimuth.sin() * elevation.cos(), elevation.sin(), -azimuth.cos() * elevation.cos())
+        crate::world::atmosphere::sun::direction(self.elevation_degrees, self.azimuth_degrees)
+    }
+}
+
+/// The time of day and the place, which put the sun in the sky (modern look). Without a time
+/// of day the sun stands where [`SunSettings`] puts it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SkySettings {
+    /// Local solar time (`"HH:MM"`; 12:00 is the sun's highest), or none: the sun's elevation
+    /// and azimuth settings.
+    pub time_of_day: Option<TimeOfDay>,
+    /// The place's latitude in degrees (-90 south to 90 north). The map's north is -z.
+    pub latitude_degrees: f32,
+    /// The day of the year, 1 (1 January) to 366.
+    pub day_of_year: u32,
+    /// Whether the day runs (the time of day advances; the window's `T` key switches it).
+    pub day_runs: bool,
+    /// How fast the day runs, hours of the day per second (0 to 24).
+    pub day_hours_per_second: f32,
+}
+
+impl Default for SkySettings {
+    fn default() -> Self {
+        // Midsummer in the middle latitudes.
+        Self {
+            time_of_day: None,
+            latitude_degrees: 45.0,
+            day_of_year: 172,
+            day_runs: false,
+            day_hours_per_second: 0.25,
+        }
+    }
+}
+
+impl SkySettings {
+    /// Advances the time of day by `seconds` of real time when the day runs (starting from
+    /// noon when no time is set). Returns whether it moved.
+    pub fn run(&mut self, seconds: f32) -> bool {
+        if !self.day_runs || self.day_hours_per_second <= 0.0 || seconds <= 0.0 {
+            return false;
+        }
+        let now = self.time_of_day.map_or(12.0, TimeOfDay::hours);
+        self.time_of_day = Some(TimeOfDay::from_hours(now + seconds * self.day_hours_per_second));
+        true
     }
 }
 
@@ -219,6 +264,43 @@ impl Default for TerrainSettings {
     }
 }
 
+/// The ground's materials (modern look): rock on cliffs, scree below them, grass and soil on
+/// gentle slopes (the colour map's colours, darker soil where water gathers), sand on the shores
+/// and snow high up, chosen by slope, height, curvature, aspect and the erosion's flow, blended by
+/// their own relief and projected from three sides where the ground is steep.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GroundSettings {
+    /// Materials from the land's shape (off: the colour map with the detail map, as before).
+    pub materials: bool,
+    /// The slope in degrees where bare rock takes over (10 to 80).
+    pub rock_slope_degrees: f32,
+    /// The snow line, as a fraction of the land's highest point above the water (0 to 1.5; over
+    /// 1, no snow). Lower on slopes facing north (-z), none on the steepest.
+    pub snow_line: f32,
+    /// How high above the water the shore's sand reaches, as a fraction of the land's highest
+    /// point (0 to 0.5).
+    pub sand_line: f32,
+    /// The strength of the materials' relief on the light (detail normals, 0 to 2).
+    pub detail: f32,
+    /// The size of the materials' grain: world units one tile of their texture spans, as a
+    /// fraction of the terrain's side (0.002 to 0.5).
+    pub texture_size: f32,
+}
+
+impl Default for GroundSettings {
+    fn default() -> Self {
+        Self {
+            materials: true,
+            rock_slope_degrees: 38.0,
+            snow_line: 0.72,
+            sand_line: 0.035,
+            detail: 1.0,
+            texture_size: 0.03,
+        }
+    }
+}
+
 /// A camera and a time, saved so that a screenshot can be taken again exactly. Every key is
 /// optional: a missing one takes the course's start (see [`Default`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -268,12 +350,16 @@ pub struct Settings {
     pub look: Look,
     /// The sun and the sky's light.
     pub sun: SunSettings,
+    /// The time of day and the place (the sun's position when a time is set).
+    pub sky: SkySettings,
     /// The fog.
     pub fog: FogSettings,
     /// The water.
     pub water: WaterSettings,
     /// The land's geometry.
     pub terrain: TerrainSettings,
+    /// The ground's materials.
+    pub ground: GroundSettings,
     /// A saved camera and time (written by the window's panel; `--screenshot` uses it unless
     /// the command line gives its own).
     pub view: Option<ViewSettings>,
@@ -326,6 +412,15 @@ impl Settings {
         Self { look: Look::Course, ..Self::default() }
     }
 
+    /// Unit vector toward the sun (y-up): from the time of day, latitude and day of the year
+    /// when a time is set, else from the sun's elevation and azimuth.
+    pub fn sun_direction(&self) -> Vec3 {
+        match self.sky.time_of_day {
+            Some(time) => solar_position(time, self.sky.latitude_degrees, self.sky.day_of_year).direction(),
+            None => self.sun.direction(),
+        }
+    }
+
     /// Every number with its key and allowed range, for checking and for the panel.
     pub fn ranges(&self) -> Vec<(&'static str, f64, f64, f64)> {
         let f = f64::from;
@@ -334,6 +429,9 @@ impl Settings {
             ("sun.azimuth_degrees", f(self.sun.azimuth_degrees), -360.0, 720.0),
             ("sun.intensity", f(self.sun.intensity), 0.0, 4.0),
             ("sun.ambient", f(self.sun.ambient), 0.0, 2.0),
+            ("sky.latitude_degrees", f(self.sky.latitude_degrees), -90.0, 90.0),
+            ("sky.day_of_year", f64::from(self.sky.day_of_year), 1.0, 366.0),
+            ("sky.day_hours_per_second", f(self.sky.day_hours_per_second), 0.0, 24.0),
             ("fog.density", f(self.fog.density), 0.0, 1.0),
             ("fog.height_falloff", f(self.fog.height_falloff), 0.0, 10.0),
             ("water.clarity", f(self.water.clarity), 0.01, 10.0),
@@ -341,6 +439,11 @@ impl Settings {
             ("water.wave_scale", f(self.water.wave_scale), 0.1, 20.0),
             ("water.wave_strength", f(self.water.wave_strength), 0.0, 2.0),
             ("terrain.lod_error_pixels", f(self.terrain.lod_error_pixels), 0.5, 16.0),
+            ("ground.rock_slope_degrees", f(self.ground.rock_slope_degrees), 10.0, 80.0),
+            ("ground.snow_line", f(self.ground.snow_line), 0.0, 1.5),
+            ("ground.sand_line", f(self.ground.sand_line), 0.0, 0.5),
+            ("ground.detail", f(self.ground.detail), 0.0, 2.0),
+            ("ground.texture_size", f(self.ground.texture_size), 0.002, 0.5),
         ];
         let colour_keys = [
             ["sun.colour[0]", "sun.colour[1]", "sun.colour[2]"],
@@ -535,6 +638,34 @@ mod tests {
         // Azimuth 90 points toward +x, like a yaw of 90.
         let east = SunSettings { azimuth_degrees: 90.0, elevation_degrees: 0.0, ..SunSettings::default() };
         assert!((east.direction() - Vec3::X).length() < 1e-6);
+    }
+
+    #[test]
+    fn a_time_of_day_places_the_sun() {
+        let text = "[sky]\ntime_of_day = \"12:00\"\nlatitude_degrees = 40.0\nday_of_year = 80\n";
+        let settings = Settings::from_toml(text, Path::new("s.toml")).expect("valid");
+        let elevation = settings.sun_direction().y.asin().to_degrees();
+        assert!((elevation - 50.0).abs() < 1.0, "{elevation}");
+        // Without a time, the sun's own elevation and azimuth.
+        assert_eq!(Settings::default().sun_direction(), SunSettings::default().direction());
+        // Round trip, and errors naming the file and the value.
+        assert_eq!(Settings::from_toml(&settings.to_toml(), Path::new("s.toml")).expect("valid"), settings);
+        let error = Settings::from_toml("[sky]\ntime_of_day = \"25:00\"\n", Path::new("t.toml"))
+            .expect_err("bad time")
+            .to_string();
+        assert!(error.contains("t.toml") && error.contains("25:00"), "{error}");
+        let error = Settings::from_toml("[sky]\nlatitude_degrees = 95\n", Path::new("t.toml"))
+            .expect_err("bad latitude")
+            .to_string();
+        assert!(error.starts_with("t.toml:2: ") && error.contains("sky.latitude_degrees"), "{error}");
+        // A running day advances the clock, wrapping at midnight.
+        let mut sky = SkySettings { day_runs: true, day_hours_per_second: 2.0, ..SkySettings::default() };
+        assert!(sky.run(1.0));
+        assert_eq!(sky.time_of_day.map(|t| t.to_string()), Some("14:00".to_string()));
+        assert!(sky.run(5.0));
+        assert_eq!(sky.time_of_day.map(|t| t.to_string()), Some("00:00".to_string()));
+        sky.day_runs = false;
+        assert!(!sky.run(1.0));
     }
 
     #[test]

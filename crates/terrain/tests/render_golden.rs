@@ -59,7 +59,6 @@ fn the_modern_look_along_the_coast_at_sunset() {
     let mut settings = Settings::default();
     settings.sun.elevation_degrees = 6.0;
     settings.sun.azimuth_degrees = 290.0;
-    settings.sun.colour = [1.0, 0.65, 0.35];
     let mut view = view_from([-9.5, 0.7, 6.0], 20.0, -4.0);
     view.time_seconds = 20.0;
     assert_golden("modern-coast-sunset", &render_with(gpu, island(), &settings, SIZE, &view));

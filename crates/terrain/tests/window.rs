@@ -158,11 +158,12 @@ fn session(
 }
 
 /// What the test does, as xdotool commands after finding the window: hold W, move the mouse
-/// right, turn the scroll wheel away from the user (button 4); then open the panel (F1), take a
+/// right, turn the scroll wheel away from the user (button 4), let the day run (T); then open the
+/// panel (F1), take a
 /// screenshot (F12), move the keyboard focus to the look's second radio button (Tab, Tab) and
 /// choose it (space), take another screenshot, and press Esc.
 const SCRIPT: &str = "mousemove --window %1 320 200 sleep 0.3 keydown w sleep 0.6 keyup w sleep 0.2 \
-    mousemove_relative -- 60 0 sleep 0.3 click 4 sleep 0.3 \
+    mousemove_relative -- 60 0 sleep 0.3 click 4 sleep 0.3 key t sleep 0.5 \
     key F1 sleep 1.0 key F12 sleep 1.5 key Tab sleep 0.4 key Tab sleep 0.4 key space sleep 1.5 \
     key F12 sleep 1.5 key Escape";
 
@@ -181,6 +182,10 @@ fn moves_and_tunes_with_real_input(world: &World) {
         "the mouse did not turn right"
     );
     assert!(summary.field_of_view_degrees < 45.0, "the scroll wheel did not zoom in");
+    // T let the day run: from noon, the clock moved on.
+    assert!(summary.settings.sky.day_runs, "T did not let the day run");
+    let hours = summary.settings.sky.time_of_day.map(|t| t.hours());
+    assert!(hours.is_some_and(|h| h > 12.0 && h < 16.0), "the day did not run from noon: {hours:?}");
     // The panel: the keyboard chose the course's look, and the frame changed.
     assert_eq!(summary.settings.look, Look::Course, "the keyboard did not switch the look in the panel");
     let shots: Vec<PathBuf> = notices

@@ -210,6 +210,8 @@ impl PageApp {
                 .update(step.as_secs_f32(), &limits, |x, z| height_under(&world.heightmap, config, x, z)),
             None => self.camera.update(step.as_secs_f32(), &limits, |_, _| None),
         }
+        // A running day moves the sun; the renderer follows the settings (`follow_panel`).
+        self.settings.sky.run(step.as_secs_f32());
         let view = self.view();
         let Some(window) = self.window.clone() else { return };
         let Some(drawing) = &mut self.drawing else { return };
@@ -377,6 +379,7 @@ impl PageApp {
                     drawing.overlay.clear();
                 }
             }
+            Action::ToggleDay => self.settings.sky.day_runs = !self.settings.sky.day_runs,
             // The browser takes screenshots of pages itself.
             Action::Screenshot => {}
             Action::FullScreen => {

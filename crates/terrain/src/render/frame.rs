@@ -198,6 +198,6 @@ pub(super) fn clear_colour(config: &crate::config::SceneConfig, world: &crate::w
     wgpu::Color { r: sum[0] / count, g: sum[1] / count, b: sum[2] / count, a: 1.0 }
 }
 
-fn srgb_to_linear(value: f64) -> f64 {
+pub(super) fn srgb_to_linear(value: f64) -> f64 {
     if value <= 0.04045 { value / 12.92 } else { ((value + 0.055) / 1.055).powf(2.4) }
 }

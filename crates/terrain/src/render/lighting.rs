@@ -1,6 +1,6 @@
-//! The modern look's shared lighting (group 2 of its shaders, `lighting.wgsl`): the sun, the
-//! sky's light, the fog, the water's parameters, the sky box (the fog's colour) and the shadow
-//! map.
+//! The modern look's shared lighting (group 2 of its shaders, `lighting.wgsl`): the sun (or the
+//! moon), the sky's light, the fog, the water's parameters, the sky-view table of the atmosphere
+//! (the sky's and the fog's colour, `world::atmosphere`) and the shadow map.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec2, Mat4, Vec3};
@@ -9,7 +9,7 @@ use super::pipeline::{Binding, bind_group};
 use super::texture::sampler;
 use crate::config::SceneConfig;
 use crate::settings::{ReflectionQuality, Settings};
-use crate::world::SkyBox;
+use crate::world::atmosphere::{Atmosphere, SKY_VIEW_HEIGHT, SKY_VIEW_WIDTH, SkyLight};
 
 /// Side of the shadow map, in texels.
 pub const SHADOW_MAP_SIZE: u32 = 2048;
@@ -31,6 +31,10 @@ pub struct SceneUniforms {
     water_flags: [f32; 4],
     shadow_matrix: [[f32; 4]; 4],
     sky_box: [f32; 4],
+    sky_sun: [f32; 4],
+    sun_disc: [f32; 4],
+    ground: [f32; 4],
+    ground_scale: [f32; 4],
 }
 
 /// What the scene uniforms are computed from, besides the settings.
@@ -42,8 +46,49 @@ pub struct SceneInputs {
     pub frame_size: (u32, u32),
     /// World to the shadow map's clip space.
     pub shadow_matrix: Mat4,
-    /// The sky's mean colour, linear (the light of the sky dome before its strength).
+    /// The atmosphere's lights for the sun of the settings.
+    pub sky: SkySummary,
+}
+
+/// What the scene uniforms take of a [`SkyLight`] (all but its table).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SkySummary {
+    /// Toward the sun (unit).
+    pub sun_direction: Vec3,
+    /// The sun's light, linear.
+    pub sun_colour: Vec3,
+    /// Toward the light that casts shadows (the sun, or the moon at night).
+    pub key_direction: Vec3,
+    /// That light's colour, linear.
+    pub key_colour: Vec3,
+    /// The sky dome's light, linear (before the ambient strength).
     pub sky_light: Vec3,
+    /// 0 by day to 1 at night.
+    pub night: f32,
+    /// How bright the scene is against a sunny day (0.05 to 1).
+    pub daylight: f32,
+    /// The sky's mean colour along the horizon (stored values, 0..=1): where no land or water
+    /// is drawn below it, the frame shows this.
+    pub horizon: Vec3,
+}
+
+impl From<&SkyLight> for SkySummary {
+    fn from(sky: &SkyLight) -> Self {
+        Self {
+            sun_direction: sky.sun_direction,
+            sun_colour: sky.sun_colour,
+            key_direction: sky.key_direction,
+            key_colour: sky.key_colour,
+            sky_light: sky.sky_light,
+            night: sky.night,
+            daylight: sky.daylight,
+            horizon: sky.texels[..SKY_VIEW_WIDTH as usize]
+                .iter()
+                .map(|t| Vec3::new(f32::from(t[0]), f32::from(t[1]), f32::from(t[2])) / 255.0)
+                .sum::<Vec3>()
+                / SKY_VIEW_WIDTH as f32,
+        }
+    }
 }
 
 impl SceneUniforms {
@@ -52,8 +97,12 @@ impl SceneUniforms {
         let flag = |on: bool| if on { 1.0 } else { 0.0 };
         let sun = &settings.sun;
         let water = &settings.water;
-        let sun_colour = Vec3::from_array(sun.colour) * sun.intensity;
-        let sky_light = inputs.sky_light * sun.ambient;
+        let sky = &inputs.sky;
+        let tint = Vec3::from_array(sun.colour);
+        let key_colour = sky.key_colour * tint;
+        let sky_light = sky.sky_light * sun.ambient;
+        // The sun's disc: its colour through the air, bright enough to saturate (stored values).
+        let disc = (sky.sun_colour * tint * 40.0).min(Vec3::ONE).powf(0.5);
         // The waves drift at the course's speed (its water texture's, in world units a second),
         // times the settings' factor; the second map crosses the first at an angle.
         let course_speed = DVec2::new(
@@ -66,9 +115,12 @@ impl SceneUniforms {
             DVec2::new(travel.x * 0.6 - travel.y * 0.8, travel.x * 0.8 + travel.y * 0.6) * 1.37 * 0.8;
         let wrap = |v: f64| v.rem_euclid(1.0) as f32;
         let box_size = config.sky_box_size;
+        let ground = &settings.ground;
+        // The land's highest point above the water (world units).
+        let top = config.height_of_level(255.0).max(1e-3);
         Self {
-            sun_direction: sun.direction().extend(flag(sun.lighting)).to_array(),
-            sun_colour: sun_colour.extend(flag(sun.lighting && sun.shadows)).to_array(),
+            sun_direction: sky.key_direction.extend(flag(sun.lighting)).to_array(),
+            sun_colour: key_colour.extend(flag(sun.lighting && sun.shadows)).to_array(),
             sky_light: sky_light.extend(0.0).to_array(),
             fog: [
                 settings.fog.density,
@@ -92,27 +144,18 @@ impl SceneUniforms {
             ],
             shadow_matrix: inputs.shadow_matrix.to_cols_array_2d(),
             sky_box: [box_size.x / 2.0, box_size.y, box_size.z / 2.0, 1.0 / SHADOW_MAP_SIZE as f32],
+            sky_sun: sky.sun_direction.extend(sky.daylight).to_array(),
+            sun_disc: disc.extend(sky.night).to_array(),
+            ground: [
+                flag(ground.materials),
+                1.0 - ground.rock_slope_degrees.to_radians().cos(),
+                ground.snow_line * top,
+                // No shore without a sea.
+                if config.sea { ground.sand_line * top } else { -1e4 },
+            ],
+            ground_scale: [1.0 / (ground.texture_size * config.terrain_length), ground.detail, top, 0.0],
         }
     }
-}
-
-/// The mean colour of a sky's top and the upper halves of its walls, linear (stored values
-/// squared, as the shaders light with a gamma of 2): the light of the sky dome.
-pub fn sky_light(sky: &SkyBox) -> Vec3 {
-    let mut sum = Vec3::ZERO;
-    let mut count = 0.0;
-    for (index, face) in sky.faces().iter().enumerate() {
-        let rows = if index == 4 { face.height() } else { face.height() / 2 };
-        for y in (0..rows).step_by(4) {
-            for x in (0..face.width()).step_by(4) {
-                let p = face.get_pixel(x, y).0;
-                let c = Vec3::new(f32::from(p[0]), f32::from(p[1]), f32::from(p[2])) / 255.0;
-                sum += c * c;
-                count += 1.0;
-            }
-        }
-    }
-    if count > 0.0 { sum / count } else { Vec3::splat(0.5) }
 }
 
 /// World to the shadow map's clip space: an orthographic view along the sun's light that covers
@@ -152,13 +195,18 @@ pub struct Lighting {
     pub group: wgpu::BindGroup,
     /// The shadow map's view, to render into.
     pub shadow_view: wgpu::TextureView,
-    /// The sky's light (linear mean colour).
-    pub sky_light: Vec3,
+    /// The atmosphere (its transmittance table).
+    atmosphere: Atmosphere,
+    /// The sky-view table on the GPU.
+    sky_view: wgpu::Texture,
+    /// The sun direction and exposure the table was worked out for, and its lights.
+    sky: Option<(Vec3, f32, SkySummary)>,
 }
 
 impl Lighting {
-    /// The lighting resources, fogging into the graded `sky` (whose faces are `sky_faces`).
-    pub fn new(device: &wgpu::Device, sky: &SkyBox, sky_faces: &wgpu::TextureView) -> Self {
+    /// The lighting resources, with the atmosphere's sky-view table (worked out on the first
+    /// [`Lighting::update_sky`]).
+    pub fn new(device: &wgpu::Device) -> Self {
         let buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scene uniforms"),
             size: size_of::<SceneUniforms>() as u64,
@@ -189,23 +237,65 @@ impl Lighting {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
+        let sky_view = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("sky view"),
+            size: wgpu::Extent3d { width: SKY_VIEW_WIDTH, height: SKY_VIEW_HEIGHT, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8Unorm,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        let sky_view_view = sky_view.create_view(&wgpu::TextureViewDescriptor::default());
         let (layout, group) = bind_group(
             device,
             "lighting",
             &[
                 Binding::Uniform(&buffer),
-                Binding::TextureArray(sky_faces),
+                Binding::Texture(&sky_view_view),
                 Binding::Sampler(&sampler(device, false)),
                 Binding::DepthTexture(&shadow_view),
                 Binding::ComparisonSampler(&comparison),
             ],
         );
-        Self { buffer, layout, group, shadow_view, sky_light: sky_light(sky) }
+        Self { buffer, layout, group, shadow_view, atmosphere: Atmosphere::earth(), sky_view, sky: None }
     }
 
-    /// GPU memory of the shadow map, in bytes.
+    /// The atmosphere's lights for the sun toward `sun` at `exposure`, working the sky-view
+    /// table out again and uploading it only when either changed.
+    pub fn update_sky(&mut self, queue: &wgpu::Queue, sun: Vec3, exposure: f32) -> SkySummary {
+        if let Some((drawn_sun, drawn_exposure, summary)) = self.sky
+            && drawn_sun == sun
+            && drawn_exposure == exposure
+        {
+            return summary;
+        }
+        let light = self.atmosphere.sky(sun, exposure);
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.sky_view,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&light.texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(SKY_VIEW_WIDTH * 4),
+                rows_per_image: Some(SKY_VIEW_HEIGHT),
+            },
+            wgpu::Extent3d { width: SKY_VIEW_WIDTH, height: SKY_VIEW_HEIGHT, depth_or_array_layers: 1 },
+        );
+        let summary = SkySummary::from(&light);
+        self.sky = Some((sun, exposure, summary));
+        summary
+    }
+
+    /// GPU memory of the shadow map and the sky-view table, in bytes.
     pub fn gpu_bytes(&self) -> u64 {
         u64::from(SHADOW_MAP_SIZE) * u64::from(SHADOW_MAP_SIZE) * 4
+            + u64::from(SKY_VIEW_WIDTH * SKY_VIEW_HEIGHT) * 4
     }
 }
 
@@ -243,7 +333,7 @@ mod tests {
             time_seconds: t,
             frame_size: (4, 4),
             shadow_matrix: Mat4::IDENTITY,
-            sky_light: Vec3::ONE,
+            sky: SkySummary::from(&Atmosphere::earth().sky(Vec3::Y, 1.0)),
         };
         // 0.2 units a second over tiles of 2 units: 0.1 tile a second, drifting toward -x, -z.
         let later = SceneUniforms::new(&settings, &config, &inputs(1.0));

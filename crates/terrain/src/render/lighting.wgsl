@@ -1,4 +1,6 @@
-// The modern look's light, sky and fog, shared by its shaders (group 2, `lighting.rs`).
+// The modern look's light, sky and fog, shared by its shaders (group 2, `lighting.rs`). The sky
+// is the atmosphere's (`world::atmosphere`): a table of its colour by the view's azimuth from the
+// sun (u, 0 to 180 degrees) and elevation (v, the square root of elevation / 90 degrees).
 // World convention: y-up, the water is the plane y = 0. Colours are stored values (no sRGB
 // decoding, as the course's textures are used); lighting is computed on their squares (a gamma
 // of 2) and encoded back with a square root.
@@ -33,10 +35,21 @@ struct Scene {
     shadow_matrix: mat4x4<f32>,
     // Half the sky box's width (x) and depth (z), its height (y), w: 1 / the shadow map's side.
     sky_box: vec4<f32>,
+    // Toward the sun (unit; `sun_direction` is the light that casts shadows, the moon at night),
+    // w: how bright the scene is against a sunny day (0.05 to 1).
+    sky_sun: vec4<f32>,
+    // The sun's disc colour (stored values), w: 0 by day to 1 at night (the moon's disc).
+    sun_disc: vec4<f32>,
+    // The ground's materials: x: 1 when on, y: 1 - cos(the rock's slope), z: the snow line and
+    // w: the sand line (world y; far below the land without a sea).
+    ground: vec4<f32>,
+    // x: 1 / world units a tile of the material noise spans, y: the detail normals' strength,
+    // z: the land's highest point (world y), w: unused.
+    ground_scale: vec4<f32>,
 }
 
 @group(2) @binding(0) var<uniform> scene: Scene;
-@group(2) @binding(1) var sky_faces: texture_2d_array<f32>;
+@group(2) @binding(1) var sky_view: texture_2d<f32>;
 @group(2) @binding(2) var sky_sampler: sampler;
 @group(2) @binding(3) var shadow_map: texture_depth_2d;
 @group(2) @binding(4) var shadow_sampler: sampler_comparison;
@@ -50,88 +63,38 @@ fn to_stored(c: vec3<f32>) -> vec3<f32> {
     return sqrt(max(c, vec3<f32>(0.0)));
 }
 
-// How much daylight there is: 1 with the sun well up, less as it sets.
+// How much daylight there is: 1 on a sunny day, less at dusk, 0.05 or more at night.
 fn daylight() -> f32 {
-    return mix(0.28, 1.0, smoothstep(-0.1, 0.35, scene.sun_direction.y));
+    return scene.sky_sun.w;
 }
 
-// The sky box's colour `stored` seen in `direction` (unit, from the eye), graded for the sun:
-// darker as it sets, warm toward it near the horizon, with its glow and disc.
-fn graded_sky(stored: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
-    let sun = scene.sun_direction.xyz;
-    let facing = max(dot(direction, sun), 0.0);
-    let sunset = 1.0 - smoothstep(0.0, 0.32, sun.y);
-    var colour = stored * daylight();
-    // Near the horizon, toward the sun, the sky takes the sun's colour as it sets.
-    let horizontal_sun = normalize(vec3<f32>(sun.x, 0.0, sun.z) + vec3<f32>(1e-5, 0.0, 0.0));
-    let horizontal = normalize(vec3<f32>(direction.x, 0.0, direction.z) + vec3<f32>(1e-5, 0.0, 0.0));
-    let toward = 0.5 + 0.5 * dot(horizontal, horizontal_sun);
-    let above = 1.0 - clamp(direction.y, 0.0, 1.0);
-    let low = above * above * above;
-    let warmth = sunset * low * toward * toward;
-    let sun_colour = scene.sun_colour.rgb / max(max(scene.sun_colour.r, scene.sun_colour.g), max(scene.sun_colour.b, 1e-3));
-    colour = mix(colour, sun_colour * (0.55 + 0.45 * daylight()), 0.75 * warmth);
-    // The sun's glow and disc.
-    // facing^8 and facing^64 by squaring: pow is exp2 and log2, which a software GPU works out
-    // as polynomials several times the cost of these products.
-    let facing2 = facing * facing;
-    let facing4 = facing2 * facing2;
-    let facing8 = facing4 * facing4;
-    let facing16 = facing8 * facing8;
-    let facing32 = facing16 * facing16;
-    let glow = 0.25 * facing8 + 0.5 * facing32 * facing32 + smoothstep(0.9993, 0.9997, facing);
-    colour = mix(colour, sun_colour, min(glow, 1.0) * step(-0.02, sun.y + 0.02));
+const PI: f32 = 3.14159265;
+
+// The sky's colour (stored values) seen along `direction` (unit, from the eye; below the
+// horizon, the horizon's), with the sun's disc and, at night, the full moon's opposite it.
+fn sky_colour(direction: vec3<f32>) -> vec3<f32> {
+    let sun = scene.sky_sun.xyz;
+    let flat_view = normalize(vec2<f32>(direction.x, direction.z) + vec2<f32>(1e-5, 0.0));
+    let flat_sun = normalize(vec2<f32>(sun.x, sun.z) + vec2<f32>(1e-5, 0.0));
+    let u = acos(clamp(dot(flat_view, flat_sun), -1.0, 1.0)) / PI;
+    let v = sqrt(asin(clamp(direction.y, 0.0, 1.0)) / (0.5 * PI));
+    var colour = textureSampleLevel(sky_view, sky_sampler, vec2<f32>(u, v), 0.0).rgb;
+    // Discs of about 0.8 degrees (larger than life, to read on screen).
+    let facing = dot(direction, sun);
+    let sun_disc = smoothstep(0.99985, 0.99992, facing);
+    colour = mix(colour, scene.sun_disc.rgb, sun_disc * step(0.0, direction.y));
+    let moon_disc = smoothstep(0.99985, 0.99992, -facing) * scene.sun_disc.w;
+    colour = mix(colour, vec3<f32>(0.80, 0.83, 0.90), moon_disc * step(0.0, direction.y));
     return colour;
 }
 
-// The graded sky box seen from `origin` (inside the box) along `direction`: where the ray
-// leaves the box, the face it crosses and its texel there (faces laid out as `SkyFace::point`
-// lays them out). Rays going down see the walls' bottom rows.
-fn sky_along(origin: vec3<f32>, direction: vec3<f32>) -> vec3<f32> {
-    let half_size = scene.sky_box.xz;
-    let top = scene.sky_box.y;
-    let big = 1e9;
-    let to_x = select(big, (select(-half_size.x, half_size.x, direction.x > 0.0) - origin.x) / direction.x, abs(direction.x) > 1e-6);
-    let to_z = select(big, (select(-half_size.y, half_size.y, direction.z > 0.0) - origin.z) / direction.z, abs(direction.z) > 1e-6);
-    let to_top = select(big, (top - origin.y) / direction.y, direction.y > 1e-6);
-    let t = max(min(min(to_x, to_z), to_top), 0.0);
-    let exit = origin + direction * t;
-    var layer = 4;
-    var uv = vec2<f32>((exit.x + half_size.x) / (2.0 * half_size.x), (half_size.y - exit.z) / (2.0 * half_size.y));
-    if (to_top > min(to_x, to_z)) {
-        let v = 1.0 - max(exit.y, 0.0) / top;
-        if (to_z < to_x) {
-            if (direction.z < 0.0) {
-                layer = 0;
-                uv = vec2<f32>((exit.x + half_size.x) / (2.0 * half_size.x), v);
-            } else {
-                layer = 2;
-                uv = vec2<f32>((half_size.x - exit.x) / (2.0 * half_size.x), v);
-            }
-        } else {
-            if (direction.x > 0.0) {
-                layer = 1;
-                uv = vec2<f32>((exit.z + half_size.y) / (2.0 * half_size.y), v);
-            } else {
-                layer = 3;
-                uv = vec2<f32>((half_size.y - exit.z) / (2.0 * half_size.y), v);
-            }
-        }
-    }
-    let size = vec2<f32>(textureDimensions(sky_faces, 0));
-    let half_texel = vec2<f32>(0.5) / size;
-    let clamped = clamp(uv, half_texel, vec2<f32>(1.0) - half_texel);
-    let stored = textureSampleLevel(sky_faces, sky_sampler, clamped, layer, 0.0).rgb;
-    return graded_sky(stored, direction);
-}
-
-// The graded sky at the horizon in the direction from `eye` to `point` (seen horizontally, at
-// the foot of the sky box's walls): the colour the world fades into far away.
+// The sky at the horizon in the direction from `eye` to `point` (seen horizontally): the colour
+// the world fades into far away (the air's light along the view, toward the sun or away).
 fn horizon_colour(eye: vec3<f32>, point: vec3<f32>) -> vec3<f32> {
     let ray = point.xz - eye.xz;
     let length_xz = length(ray);
     let d = select(vec2<f32>(0.0, -1.0), ray / max(length_xz, 1e-6), length_xz > 1e-6);
-    return sky_along(vec3<f32>(eye.x, 0.0, eye.z), vec3<f32>(d.x, 0.0, d.y));
+    return sky_colour(vec3<f32>(d.x, 0.0, d.y));
 }
 
 // How much of the colour at `point` seen from `eye` the fog replaces (0 to 1): exponential

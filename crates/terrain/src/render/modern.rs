@@ -8,11 +8,12 @@ use glam::Vec3;
 use super::grid::{GridPass, GridTerrain, upload_view};
 use super::light_map::LightMap;
 use super::lighting::{Lighting, SceneInputs, SceneUniforms, sun_matrix};
-use super::pipeline::{PassContext, PipelineSpec, pipeline, shader_source};
+use super::pipeline::{Binding, PassContext, PipelineSpec, bind_group, pipeline, shader_source};
 use super::reflection::{REFLECTION_FORMAT, ReflectionTarget};
 use super::sea::SeaPass;
 use super::shadow::ShadowPass;
 use super::sky::{SkyFaces, SkyPass};
+use super::texture::sampler;
 use super::{DrawBudget, RenderError, Renderer};
 use crate::config::SceneConfig;
 use crate::settings::Settings;
@@ -33,6 +34,9 @@ pub struct ModernLook {
     lighting: Lighting,
     land_layout: wgpu::BindGroupLayout,
     land_group: wgpu::BindGroup,
+    /// The ground's materials (group 3 of the land): the land's shape and the material noise.
+    ground_layout: wgpu::BindGroupLayout,
+    ground_group: wgpu::BindGroup,
     /// The land as it is and its reflection (filled), then their wireframe versions.
     land: [wgpu::RenderPipeline; 2],
     wireframe: Option<[wgpu::RenderPipeline; 2]>,
@@ -60,7 +64,7 @@ impl ModernLook {
     ) -> Result<Self, RenderError> {
         let device = context.device;
         let faces = SkyFaces::new(context, world.clear_sky())?;
-        let lighting = Lighting::new(device, world.clear_sky(), &faces.view);
+        let lighting = Lighting::new(device);
         let reflection_context = PassContext { target_format: REFLECTION_FORMAT, ..*context };
         let sky = SkyPass::modern(
             context,
@@ -74,7 +78,25 @@ impl ModernLook {
         let light_map = LightMap::new(context, grid, &lighting.layout);
         let (land_layout, land_group) =
             grid.land_group(device, "land (modern)", &albedo, &detail, light_map.view());
-        let land = land_pipelines(context, &land_layout, &lighting.layout, wgpu::PolygonMode::Fill);
+        let ground_map = crate::world::ground::ground_map(&world.heightmap, config, world.erosion.as_ref());
+        let noise = crate::world::ground::material_noise();
+        let ground_bytes = (ground_map.as_raw().len() + noise.as_raw().len()) as u64 * 4 / 3;
+        let ground_view = upload_view(context, "ground map", &ground_map)?;
+        let noise_view = upload_view(context, "material noise", &noise)?;
+        let (ground_layout, ground_group) = bind_group(
+            device,
+            "ground",
+            &[
+                Binding::Texture(&ground_view),
+                Binding::Texture(&noise_view),
+                Binding::Sampler(&sampler(device, true)),
+            ],
+        );
+        let land = land_pipelines(
+            context,
+            [&land_layout, &lighting.layout, &ground_layout],
+            wgpu::PolygonMode::Fill,
+        );
         let (heights_layout, heights_group) = grid.heights_group(device);
         let shadow = ShadowPass::new(context, &heights_layout);
         let sea = SeaPass::new(
@@ -90,12 +112,15 @@ impl ModernLook {
             Vec3::new(half, config.height_of_level(255.0), half),
         );
         let images = world.albedo_map().as_raw().len() + world.detail_map.as_raw().len();
-        let gpu_bytes = faces.bytes + images as u64 * 4 / 3 + lighting.gpu_bytes() + sea.gpu_bytes();
+        let gpu_bytes =
+            faces.bytes + images as u64 * 4 / 3 + lighting.gpu_bytes() + sea.gpu_bytes() + ground_bytes;
         Ok(Self {
             sky,
             lighting,
             land_layout,
             land_group,
+            ground_layout,
+            ground_group,
             land,
             wireframe: None,
             show_wireframe: false,
@@ -123,8 +148,7 @@ impl ModernLook {
         if on && able && self.wireframe.is_none() {
             self.wireframe = Some(land_pipelines(
                 context,
-                &self.land_layout,
-                &self.lighting.layout,
+                [&self.land_layout, &self.lighting.layout, &self.ground_layout],
                 wgpu::PolygonMode::Line,
             ));
         }
@@ -133,14 +157,13 @@ impl ModernLook {
 }
 
 /// The modern land's pipelines: as it is (into the frame) and reflected (into the reflection).
+/// `layouts`: the land's group (1), the lighting (2) and the ground's materials (3).
 fn land_pipelines(
     context: &PassContext<'_>,
-    layout: &wgpu::BindGroupLayout,
-    lighting: &wgpu::BindGroupLayout,
+    layouts: [&wgpu::BindGroupLayout; 3],
     polygon_mode: wgpu::PolygonMode,
 ) -> [wgpu::RenderPipeline; 2] {
     let buffers = GridTerrain::buffer_layouts();
-    let layouts = [layout, lighting];
     let spec = PipelineSpec {
         polygon_mode,
         vertex_entry: "vs_lit",
@@ -158,14 +181,22 @@ impl Renderer {
     pub(super) fn prepare_modern(&mut self, gpu: &super::Gpu, size: (u32, u32), time_seconds: f64) -> bool {
         let settings: &Settings = &self.settings;
         let (Some(modern), Some(grid)) = (&mut self.modern, &mut self.grid) else { return false };
-        let sun = settings.sun.direction();
+        let sky = modern.lighting.update_sky(&gpu.queue, settings.sun_direction(), settings.sun.intensity);
+        if !self.config.sea {
+            // Below the horizon, where no land is drawn, the frame shows the horizon's colour
+            // (as `frame::clear_colour` does for a painted sky).
+            let linear = |c: f32| super::frame::srgb_to_linear(f64::from(c));
+            self.clear = wgpu::Color {
+                r: linear(sky.horizon.x),
+                g: linear(sky.horizon.y),
+                b: linear(sky.horizon.z),
+                a: 1.0,
+            };
+        }
+        // The light that casts shadows: the sun, or the moon at night.
+        let sun = sky.key_direction;
         let shadow_matrix = sun_matrix(sun, modern.bounds.0, modern.bounds.1);
-        let inputs = SceneInputs {
-            time_seconds,
-            frame_size: size,
-            shadow_matrix,
-            sky_light: modern.lighting.sky_light,
-        };
+        let inputs = SceneInputs { time_seconds, frame_size: size, shadow_matrix, sky };
         let uniforms = SceneUniforms::new(settings, &self.config, &inputs);
         gpu.queue.write_buffer(&modern.lighting.buffer, 0, bytemuck::bytes_of(&uniforms));
         // The reflection, at the settings' fraction of the frame.
@@ -234,6 +265,7 @@ impl Renderer {
                 pass.set_bind_group(0, mirrored, &[]);
                 pass.set_bind_group(1, &modern.land_group, &[]);
                 pass.set_bind_group(2, &modern.lighting.group, &[]);
+                pass.set_bind_group(3, &modern.ground_group, &[]);
                 grid.draw(&mut pass, GridPass::Mirrored);
             }
             if reflected_sky {
@@ -246,6 +278,7 @@ impl Renderer {
             pass.set_bind_group(0, direct, &[]);
             pass.set_bind_group(1, &modern.land_group, &[]);
             pass.set_bind_group(2, &modern.lighting.group, &[]);
+            pass.set_bind_group(3, &modern.ground_group, &[]);
             grid.draw(&mut pass, GridPass::Direct);
         }
         if budget.take() {

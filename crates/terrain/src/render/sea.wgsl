@@ -90,7 +90,7 @@ fn fs_main(in: SeaVertex) -> @location(0) vec4<f32> {
         let uv = in.clip.xy / size + normal.xz * vec2<f32>(0.06, 0.06) / (1.0 + 0.15 * distance);
         reflected = textureSampleLevel(reflection, edge_clamp, clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0)), 0.0).rgb;
     } else {
-        reflected = sky_along(in.world, reflect(-view, normal));
+        reflected = sky_colour(reflect(-view, normal));
     }
 
     // What comes up from below: the sea floor fading into the water's colour with depth.

@@ -80,8 +80,9 @@ impl SkyPass {
         Self::build(context, context, faces, config, COURSE_SHADER, ("vs_main", "fs_main"), None)
     }
 
-    /// The modern look's sky box: `faces` graded for the sun by `lighting` (group 2, with its
-    /// `layout`). Its mirror image is drawn into the reflection, described by `reflection`.
+    /// The modern look's sky box: the atmosphere's colours from `lighting` (group 2, with its
+    /// `layout`; `faces` are bound but unused); without a sea its walls reach as far below the
+    /// horizon as above it (where no land is drawn, the horizon's colour shows). Its mirror image is drawn into the reflection, described by `reflection`.
     pub fn modern(
         context: &PassContext<'_>,
         reflection: &PassContext<'_>,
@@ -115,7 +116,9 @@ impl SkyPass {
             "sky",
             &[Binding::TextureArray(&faces.view), Binding::Sampler(&sampler(device, false))],
         );
-        let (vertices, indices) = box_mesh(config);
+        // The modern look's sky (the one with lighting) reaches below the horizon where no sea
+        // covers it.
+        let (vertices, indices) = box_mesh(config, lighting.is_some() && !config.sea);
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x2, 2 => Uint32];
         let buffers = [wgpu::VertexBufferLayout {
             array_stride: size_of::<SkyVertex>() as u64,
@@ -165,8 +168,9 @@ impl SkyPass {
     }
 }
 
-/// The five faces as quads, counter-clockwise seen from inside the box.
-fn box_mesh(config: &SceneConfig) -> (Vec<SkyVertex>, Vec<u16>) {
+/// The five faces as quads, counter-clockwise seen from inside the box; with `below_horizon`,
+/// the walls reach down to minus the box's height (their texture coordinates unchanged).
+fn box_mesh(config: &SceneConfig, below_horizon: bool) -> (Vec<SkyVertex>, Vec<u16>) {
     let size = config.sky_box_size.as_dvec3();
     let mut vertices = Vec::with_capacity(20);
     let mut indices = Vec::with_capacity(30);
@@ -174,8 +178,9 @@ fn box_mesh(config: &SceneConfig) -> (Vec<SkyVertex>, Vec<u16>) {
         let first = vertices.len() as u16;
         // Corners in image order: top left, top right, bottom right, bottom left.
         for (u, v) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            let reach = if below_horizon && face != SkyFace::Top && v == 1.0 { 2.0 } else { v };
             vertices.push(SkyVertex {
-                position: face.point(u, v, size).as_vec3().to_array(),
+                position: face.point(u, reach, size).as_vec3().to_array(),
                 uv: [u as f32, v as f32],
                 layer: layer as u32,
             });
@@ -195,15 +200,19 @@ mod tests {
 
     #[test]
     fn faces_turn_toward_the_inside() {
-        let (vertices, indices) = box_mesh(&SceneConfig::default());
-        assert_eq!(vertices.len(), 20);
-        // A point inside the box sees every triangle's front: its normal points at it.
-        let inside = Vec3::new(0.0, 2.5, 10.0);
-        for triangle in indices.chunks(3) {
-            let p = |i: u16| Vec3::from_array(vertices[i as usize].position);
-            let (a, b, c) = (p(triangle[0]), p(triangle[1]), p(triangle[2]));
-            let normal = (b - a).cross(c - a);
-            assert!(normal.dot(inside - a) > 0.0, "triangle {triangle:?} faces outward");
+        for below_horizon in [false, true] {
+            let (vertices, indices) = box_mesh(&SceneConfig::default(), below_horizon);
+            assert_eq!(vertices.len(), 20);
+            let lowest = vertices.iter().map(|v| v.position[1]).fold(f32::MAX, f32::min);
+            assert_eq!(lowest < 0.0, below_horizon);
+            // A point inside the box sees every triangle's front: its normal points at it.
+            let inside = Vec3::new(0.0, 2.5, 10.0);
+            for triangle in indices.chunks(3) {
+                let p = |i: u16| Vec3::from_array(vertices[i as usize].position);
+                let (a, b, c) = (p(triangle[0]), p(triangle[1]), p(triangle[2]));
+                let normal = (b - a).cross(c - a);
+                assert!(normal.dot(inside - a) > 0.0, "triangle {triangle:?} faces outward");
+            }
         }
     }
 }

@@ -295,6 +295,7 @@ impl App<'_> {
             Action::ToggleMouse if self.panel_open => {}
             Action::ToggleMouse => self.set_mouse_captured(!self.mouse_captured),
             Action::TogglePanel => self.toggle_panel(),
+            Action::ToggleDay => self.settings.sky.day_runs = !self.settings.sky.day_runs,
             Action::Screenshot => self.screenshot(),
             Action::FullScreen => {
                 if let Some(running) = &self.running {
@@ -402,6 +403,8 @@ impl App<'_> {
         // heights (268 MB at 8193 samples a side) is kept for it.
         let (heightmap, config) = (&self.world.heightmap, self.config);
         self.camera.update(step.as_secs_f32(), &limits, |x, z| height_under(heightmap, config, x, z));
+        // A running day moves the sun; the renderer follows the settings below.
+        self.settings.sky.run(step.as_secs_f32());
         let view = self.view();
         let Some(running) = &mut self.running else {
             return;

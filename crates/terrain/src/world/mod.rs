@@ -5,10 +5,12 @@
 //! Nothing here touches the GPU: every function is pure and unit-tested.
 
 pub mod assets;
+pub mod atmosphere;
 pub mod chunk;
 pub mod dem;
 pub mod erosion;
 pub mod export;
+pub mod ground;
 pub mod heightfield;
 pub mod heightmap;
 pub mod mesh;
