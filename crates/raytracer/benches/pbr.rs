@@ -13,9 +13,10 @@
 //!    `/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1`) the bench says so and compares with
 //!    `scalar_rgb` alone.
 //! 2. The same on Mitsuba's own scene files, the same file read by both renderers (through
-//!    `tools/mitsuba/render_xml.py` on Mitsuba's side): `scenes/cbox/cbox.xml` (256x256, 64 spp,
-//!    the file's depth 6) and `scenes/matpreview/matpreview.xml` (meshes, an environment map, a
-//!    plastic; 256x192, 64 spp, unbounded depth with Russian roulette from depth 5), from
+//!    `tools/mitsuba/render_xml.py` on Mitsuba's side, the size set through the files' own `-D`
+//!    parameters): `scenes/cbox/cbox.xml` (256x256, 64 spp, the file's depth 6) and
+//!    `scenes/matpreview/matpreview.xml` (meshes, an environment map, a plastic; 256x192, 64 spp,
+//!    unbounded depth with Russian roulette from depth 5), from
 //!    `../shared/mitsuba-data` (skipped, loudly, without it).
 //! 3. SPPM on the course's `glass-trio-area-light.txt` at 640x380: the time of a render whose
 //!    caustics are clearly visible (32 passes of 250,000 photons), with passes and photons a
@@ -224,7 +225,10 @@ fn mitsuba_xml(
 ) -> Option<f64> {
     let mut cmd = Command::new(python);
     cmd.env("DRJIT_LIBLLVM_PATH", llvm).arg(root.join("tools/mitsuba/render_xml.py")).arg(&case.path);
-    cmd.args(["-o", &out.to_string_lossy(), "--size", &format!("{}x{}", case.size.0, case.size.1)]);
+    cmd.args(["-o", &out.to_string_lossy()]);
+    for (k, v) in &case.defines {
+        cmd.args(["-D", &format!("{k}={v}")]);
+    }
     cmd.args(["--spp", &case.spp.to_string(), "--variant", variant]);
     let result = cmd.output().ok()?;
     if !result.status.success() {
@@ -239,10 +243,11 @@ fn mitsuba_xml(
     stdout.split_whitespace().skip_while(|w| *w != "render").nth(1)?.parse().ok()
 }
 
-/// A Mitsuba scene file of the benchmark.
+/// A Mitsuba scene file of the benchmark, its size given through the file's own parameters
+/// (`-D`), so that both renderers read the same film.
 struct XmlCase {
     path: PathBuf,
-    size: (u32, u32),
+    defines: Vec<(String, String)>,
     spp: u32,
 }
 
@@ -253,13 +258,18 @@ fn mitsuba_files(root: &Path, python: &Path, llvm: &Path, has_llvm: bool, runs: 
         println!("**** the Mitsuba scenes are missing ({}): not measured ****", data.display());
         return;
     }
+    let d = |pairs: &[(&str, &str)]| pairs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
     let cases = [
-        XmlCase { path: data.join("scenes/cbox/cbox.xml"), size: (256, 256), spp: 64 },
-        XmlCase { path: data.join("scenes/matpreview/matpreview.xml"), size: (256, 192), spp: 64 },
+        XmlCase { path: data.join("scenes/cbox/cbox.xml"), defines: d(&[("res", "256")]), spp: 64 },
+        XmlCase {
+            path: data.join("scenes/matpreview/matpreview.xml"),
+            defines: d(&[("width", "256"), ("height", "192")]),
+            spp: 64,
+        },
     ];
     let out = std::env::temp_dir().join("rayterra-bench-mitsuba-xml.exr");
     for case in &cases {
-        let doc = match raytracer::scene::mitsuba::read_file(&case.path, &[]) {
+        let doc = match raytracer::scene::mitsuba::read_file(&case.path, &case.defines) {
             Ok(doc) => doc,
             Err(e) => {
                 println!("**** {} cannot be read: {e} ****", case.path.display());
@@ -268,16 +278,12 @@ fn mitsuba_files(root: &Path, python: &Path, llvm: &Path, has_llvm: bool, runs: 
         };
         let built = raytracer::scene::mitsuba::build(&doc).expect("the benchmark's scenes build");
         let scene = PreparedScene::new(built.scene, &TextureSearch::default()).expect("prepares");
-        let settings = RenderSettings {
-            width: case.size.0,
-            height: case.size.1,
-            sampling: Sampling::Uniform(case.spp),
-            ..RenderSettings::for_scene(&scene)
-        };
+        let settings =
+            RenderSettings { sampling: Sampling::Uniform(case.spp), ..RenderSettings::for_scene(&scene) };
         let name = case.path.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned());
         println!(
             "path tracer against Mitsuba 3 on {name}: {}x{}, {} spp, depth {} (the file's), {threads} threads, {runs} rounds",
-            case.size.0, case.size.1, case.spp, settings.max_depth
+            settings.width, settings.height, case.spp, settings.max_depth
         );
         let mut variants = vec!["scalar_rgb"];
         if has_llvm && mitsuba_xml(python, "llvm_ad_rgb", llvm, root, case, &out).is_some() {
