@@ -296,8 +296,8 @@ pub enum Distribution {
 }
 
 /// A material parameter: a constant, or a texture looked up at the surface's texture
-/// coordinates. Scalar parameters (roughness, opacity, weights) read the first channel of a
-/// constant and the luminance of a texture.
+/// coordinates. Scalar parameters (roughness, opacity, weights) read the first channel (grey
+/// textures, the usual ones, have three equal channels).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Param {
     /// The same value everywhere (a scalar is repeated in the three channels).

@@ -249,15 +249,6 @@ impl PreparedScene {
         }
     }
 
-    /// A scalar parameter at an interaction: a constant's first channel, a texture's luminance.
-    #[inline]
-    pub fn scalar_param(&self, param: &Param, at: &Interaction) -> f64 {
-        match param {
-            Param::Constant(c) => c.x,
-            Param::Texture(t) => luminance(self.texture_value(t, at)),
-        }
-    }
-
     fn texture_value(&self, spec: &Arc<TextureSpec>, at: &Interaction) -> DVec3 {
         let (u, v) = self.surface_uv(at);
         match &**spec {
