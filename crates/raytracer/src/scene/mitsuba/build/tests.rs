@@ -225,3 +225,23 @@ fn normal_and_bump_maps_need_their_texture() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn an_orthographic_sensor_shows_its_to_world_scaled_square() {
+    let b = built(
+        r#"<scene version="3.0.0"><sensor type="orthographic">
+            <transform name="to_world"><scale x="2" y="3"/>
+                <lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="32"/></film>
+        </sensor></scene>"#,
+    );
+    let cam = &b.scene.camera;
+    assert!(cam.orthographic);
+    assert!((cam.dir - -DVec3::Z).length() < 1e-12);
+    // Rays start on the near plane (0.01 along the view).
+    assert!((cam.eye - DVec3::new(0.0, 0.0, 4.99)).length() < 1e-12, "{}", cam.eye);
+    // x in [-1, 1] scaled by 2; y in [-1/aspect, 1/aspect] scaled by 3.
+    assert!((cam.lens_width - 4.0).abs() < 1e-12 && (cam.lens_height - 3.0).abs() < 1e-12);
+    let e = errors(r#"<scene version="3.0.0"><sensor type="radiancemeter"/></scene>"#);
+    assert!(e.iter().any(|m| m.contains("`orthographic`")), "{e:?}");
+}
