@@ -91,6 +91,14 @@ pub(super) struct Physical {
 fn bitmap_specs(scene: &Scene) -> Vec<&Arc<TextureSpec>> {
     let mut seen = HashMap::new();
     let mut out = Vec::new();
+    for e in &scene.emitters {
+        if let Emitter::Spot { texture: Some(t), .. } = e
+            && matches!(**t, TextureSpec::Bitmap { .. })
+            && seen.insert(Arc::as_ptr(t) as usize, ()).is_none()
+        {
+            out.push(t);
+        }
+    }
     for p in &scene.primitives {
         if matches!(*p.material, Material::Course(_)) {
             continue;
@@ -346,6 +354,12 @@ impl PreparedScene {
 
     fn texture_value(&self, spec: &Arc<TextureSpec>, at: &Interaction) -> DVec3 {
         let (u, v) = self.surface_uv(at);
+        self.texture_at(spec, u, v)
+    }
+
+    /// A texture's value at texture coordinates `(u, v)` (before its `to_uv`); black for a
+    /// bitmap the scene did not load.
+    pub fn texture_at(&self, spec: &Arc<TextureSpec>, u: f64, v: f64) -> DVec3 {
         match &**spec {
             TextureSpec::Bitmap { nearest, wrap, to_uv, .. } => {
                 let p = to_uv.transform_point2(glam::DVec2::new(u, v));

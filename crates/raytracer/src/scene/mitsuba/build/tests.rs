@@ -245,3 +245,24 @@ fn an_orthographic_sensor_shows_its_to_world_scaled_square() {
     let e = errors(r#"<scene version="3.0.0"><sensor type="radiancemeter"/></scene>"#);
     assert!(e.iter().any(|m| m.contains("`orthographic`")), "{e:?}");
 }
+
+#[test]
+fn a_spot_keeps_its_texture_and_frame() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<emitter type="spot">
+            <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <texture name="texture" type="checkerboard"/></emitter></scene>"#
+    ));
+    match &b.scene.emitters[0] {
+        Emitter::Spot { texture, to_local, axis, .. } => {
+            assert!(texture.is_some());
+            // The axis is the spot's local +z.
+            assert!((*to_local * *axis - DVec3::Z).length() < 1e-12, "{}", *to_local * *axis);
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<emitter type="spot"><bsdf name="texture" type="diffuse"/></emitter></scene>"#
+    ));
+    assert!(e.iter().any(|m| m.contains("must be a <texture>")), "{e:?}");
+}
