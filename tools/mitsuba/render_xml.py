@@ -45,18 +45,20 @@ def main():
     if a.size:
         w, h = (int(x) for x in a.size.lower().split("x"))
         params = mi.traverse(sensor)
-        fov = params["x_fov"]
-        fov = float(fov[0] if hasattr(fov, "__len__") else fov)
-        sensor = mi.load_dict(
-            {
-                "type": "perspective",
-                "fov": fov,
-                "fov_axis": "x",
-                "to_world": sensor.world_transform(),
-                "film": {"type": "hdrfilm", "width": w, "height": h, "rfilter": sensor.film().rfilter()},
-                "sampler": {"type": "independent", "sample_count": sensor.sampler().sample_count()},
-            }
-        )
+        film = {"type": "hdrfilm", "width": w, "height": h, "rfilter": sensor.film().rfilter()}
+        sampler = {"type": "independent", "sample_count": sensor.sampler().sample_count()}
+        if "x_fov" in params:
+            fov = params["x_fov"]
+            fov = float(fov[0] if hasattr(fov, "__len__") else fov)
+            view = {"type": "perspective", "fov": fov, "fov_axis": "x"}
+        elif sensor.class_name() == "OrthographicCamera":
+            # The visible width is to_world's; the height follows the new film's aspect.
+            near = params["near_clip"]
+            view = {"type": "orthographic", "near_clip": float(near[0] if hasattr(near, "__len__") else near)}
+        else:
+            sys.exit(f"--size: cannot resize the sensor {sensor.class_name()}")
+        view.update({"to_world": sensor.world_transform(), "film": film, "sampler": sampler})
+        sensor = mi.load_dict(view)
     t1 = time.perf_counter()
     image = mi.render(scene, sensor=sensor, seed=a.seed, spp=a.spp or 0)
     if not a.variant.startswith("scalar"):

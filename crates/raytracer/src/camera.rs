@@ -1,4 +1,5 @@
-//! The course camera (spec section 3, `camera`), with an optional thin lens.
+//! The course camera (spec section 3, `camera`), with an optional thin lens, and the parallel
+//! projection of Mitsuba's `orthographic` sensor ([`CameraSettings::orthographic`]).
 //!
 //! `right = unit(N x z)` (or `x` when `N` is vertical), `up = right x N`; the image plane sits at
 //! distance 1 along `N` and spans `lens_W x lens_H`. Pixel coordinates used here are continuous:
@@ -30,6 +31,9 @@ pub struct Camera {
     aperture: f64,
     /// Distance along `forward` of the plane in focus.
     focal_distance: f64,
+    /// Parallel rays along `forward` from the plane through `eye`; the half vectors are then
+    /// half the visible rectangle.
+    orthographic: bool,
 }
 
 impl Camera {
@@ -50,6 +54,7 @@ impl Camera {
             height: height as f64,
             aperture: settings.aperture,
             focal_distance: settings.focal_distance.unwrap_or(focal_distance),
+            orthographic: settings.orthographic,
         }
     }
 
@@ -69,6 +74,9 @@ impl Camera {
     pub fn ray(&self, x: f64, y: f64, lens: (f64, f64)) -> Ray {
         let sx = 2.0 * x / self.width - 1.0;
         let sy = 1.0 - 2.0 * y / self.height;
+        if self.orthographic {
+            return Ray::new(self.eye + self.half_height * sy + self.half_width * sx, self.forward);
+        }
         let dir = self.forward + self.half_height * sy + self.half_width * sx;
         if self.aperture <= 0.0 {
             return Ray::new(self.eye, dir);
@@ -120,6 +128,24 @@ mod tests {
         let cam = Camera::new(&settings, 10, 10, 1.0);
         let ray = cam.ray(10.0, 5.0, (0.0, 0.0));
         assert!(ray.dir.x > 0.0 && ray.dir.y.abs() < 1e-12);
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel_and_cover_the_rectangle() {
+        let settings = CameraSettings {
+            eye: DVec3::new(1.0, -2.0, 0.5),
+            lens_width: 4.0,
+            lens_height: 3.0,
+            orthographic: true,
+            ..course_camera()
+        };
+        let cam = Camera::new(&settings, 40, 30, 1.0);
+        let centre = cam.ray(20.0, 15.0, (0.0, 0.0));
+        assert!((centre.origin - settings.eye).length() < 1e-12 && (centre.dir - DVec3::Y).length() < 1e-12);
+        // Top right: right = +x, up = +z, half the rectangle from the centre.
+        let corner = cam.ray(40.0, 0.0, (0.5, 0.5));
+        assert!((corner.origin - DVec3::new(3.0, -2.0, 2.0)).length() < 1e-12, "{:?}", corner.origin);
+        assert!((corner.dir - DVec3::Y).length() < 1e-12);
     }
 
     #[test]

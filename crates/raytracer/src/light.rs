@@ -3,6 +3,7 @@
 //! path model reads.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
 
@@ -98,6 +99,12 @@ pub enum Emitter {
         /// Cosine of the half-angle beyond which nothing is emitted (`cutoff_angle`, default
         /// 30 degrees).
         cos_cutoff: f64,
+        /// The spot's `texture`, projected through the cone: it multiplies the intensity of
+        /// the direction `d` (in the spot's frame) by its value at
+        /// `(0.5 + 0.5 d.x / (d.z tan(cutoff)), 0.5 + 0.5 d.y / (d.z tan(cutoff)))`.
+        texture: Option<Arc<crate::material::TextureSpec>>,
+        /// World directions to the spot's frame (the inverse of `to_world`'s linear part).
+        to_local: DMat3,
     },
     /// `directional`: light arriving along one direction from infinitely far.
     Directional {

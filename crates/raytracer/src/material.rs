@@ -141,6 +141,31 @@ pub enum Material {
         /// The material at weight 1.
         second: Box<Material>,
     },
+    /// `normalmap` or `bumpmap`: `material` shaded in a perturbed frame (Mitsuba's
+    /// `normalmap.cpp`, `bumpmap.cpp`). The path model perturbs the frame only where this is the
+    /// primitive's outermost material; the builder warns when it is nested in a wrapper.
+    Perturbed {
+        /// How the shading normal is perturbed.
+        perturbation: Perturbation,
+        /// The material shaded in the perturbed frame.
+        material: Box<Material>,
+    },
+}
+
+/// How a [`Material::Perturbed`] moves the shading normal.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Perturbation {
+    /// `normalmap`: the texture's RGB `c` (read as stored, bilinear) is the normal `2 c - 1` in
+    /// the shading frame (x along `dp/du`, z along the shading normal), normalised.
+    NormalMap(Param),
+    /// `bumpmap`: the surface moved along its shading normal by `scale` times the height texture
+    /// (its luminance); the normal follows from the height's gradient in texture coordinates.
+    BumpMap {
+        /// The height texture.
+        height: Param,
+        /// Factor on the height (`scale`, default 1), in scene units per texture unit.
+        scale: f64,
+    },
 }
 
 /// The most weighted BSDFs one material may flatten to (its leaves, and a mask's pass-through);
@@ -156,6 +181,7 @@ impl Material {
             Material::TwoSided { front, back } => front.component_count() + back.component_count(),
             Material::Mask { material, .. } => material.component_count() + 1,
             Material::Blend { first, second, .. } => first.component_count() + second.component_count(),
+            Material::Perturbed { material, .. } => material.component_count(),
             _ => 1,
         }
     }
@@ -208,6 +234,28 @@ impl Material {
                 first.visit_params(f);
                 second.visit_params(f);
             }
+            Material::Perturbed { perturbation, material } => {
+                match perturbation {
+                    Perturbation::NormalMap(p) => f(p),
+                    Perturbation::BumpMap { height, .. } => f(height),
+                }
+                material.visit_params(f);
+            }
+        }
+    }
+
+    /// Whether a [`Material::Perturbed`] is anywhere below this material's outermost level
+    /// (where the path model does not apply it).
+    pub fn nests_perturbation(&self) -> bool {
+        fn any(m: &Material) -> bool {
+            matches!(m, Material::Perturbed { .. }) || m.nests_perturbation()
+        }
+        match self {
+            Material::TwoSided { front: a, back: b } | Material::Blend { first: a, second: b, .. } => {
+                any(a) || any(b)
+            }
+            Material::Mask { material, .. } | Material::Perturbed { material, .. } => any(material),
+            _ => false,
         }
     }
 }

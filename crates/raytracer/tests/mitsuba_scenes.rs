@@ -58,7 +58,7 @@ const WHOLE_Z_LIMIT: f64 = 4.5;
 
 /// The scenes compared in CI: every supported BSDF, emitter, shape, texture and integrator
 /// appears in at least one.
-const CI_SCENES: [&str; 19] = [
+const CI_SCENES: [&str; 23] = [
     "scenes/cbox/cbox.xml",
     "scenes/matpreview/matpreview.xml",
     "docs/scenes/bsdf_diffuse_textured.xml",
@@ -71,13 +71,17 @@ const CI_SCENES: [&str; 19] = [
     "docs/scenes/bsdf_roughplastic_ggx.xml",
     "docs/scenes/bsdf_twosided_cbox_onesided.xml",
     "docs/scenes/bsdf_mask_after.xml",
+    "docs/scenes/bsdf_normalmap_with.xml",
+    "docs/scenes/bsdf_bumpmap_with.xml",
     "docs/scenes/emitter_spot_no_texture.xml",
+    "docs/scenes/emitter_spot_texture.xml",
     "docs/scenes/integrator_direct_both.xml",
     "docs/scenes/integrator_depth_2.xml",
     "docs/scenes/shape_disk.xml",
     "docs/scenes/shape_cylinder_onesided.xml",
     "docs/scenes/shape_sphere_light_analytic.xml",
     "docs/scenes/shape_ply_bunny.xml",
+    "docs/scenes/sensor_orthographic.xml",
 ];
 
 /// Scenes where rayterra and Mitsuba 3.9.1 knowingly differ, with why; they are reported, not
@@ -106,6 +110,29 @@ fn mitsuba_data() -> Option<PathBuf> {
 
 fn defines() -> Vec<(String, String)> {
     DEFINES.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+}
+
+/// The documentation's `sensor_*.xml` scenes name `meshes/` and `textures/` of `common/` without
+/// a `<path>` (Mitsuba's documentation build adds it to its file resolver): they are read through
+/// a wrapper under `target/` that gives both renderers the two search folders and includes the
+/// scene. Other scenes are read as they are.
+fn with_search_folders(path: &Path, data: &Path) -> PathBuf {
+    let stem = path.file_stem().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+    if !stem.starts_with("sensor_") {
+        return path.to_path_buf();
+    }
+    let dir = output_dir().join("wrapped");
+    std::fs::create_dir_all(&dir).expect("wrapper folder");
+    let wrapper = dir.join(format!("{stem}.xml"));
+    let text = format!(
+        "<scene version=\"3.0.0\">\n    <path value=\"{}\"/>\n    <path value=\"{}\"/>\n    \
+         <include filename=\"{}\"/>\n</scene>\n",
+        data.join("docs/scenes").display(),
+        data.join("common").display(),
+        path.display()
+    );
+    std::fs::write(&wrapper, text).expect("write the wrapper");
+    wrapper
 }
 
 /// Our scene, prepared, or why it is not compared (a plugin rayterra does not have).
@@ -273,6 +300,7 @@ fn mitsuba_scenes_render_as_mitsuba_renders_them() {
     let mut failed = Vec::new();
     for path in &scenes {
         let name = path.file_stem().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+        let path = &with_search_folders(path, &data);
         if let Some((_, why)) = KNOWN_DIFFERENCES.iter().find(|(n, _)| *n == name) {
             eprintln!("{name}: not compared: {why}");
             continue;

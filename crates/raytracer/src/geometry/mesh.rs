@@ -454,12 +454,19 @@ impl TriangleMesh {
     /// triangle `index`, `dp/ds`; `None` without texture coordinates or where they are
     /// degenerate.
     pub fn dp_ds(&self, index: u32) -> Option<DVec3> {
+        self.dp_dst(index).map(|(ds, _)| ds)
+    }
+
+    /// `(dp/ds, dp/dt)` on triangle `index` (Mitsuba's `dp_du`, `dp_dv`); `None` as for
+    /// [`TriangleMesh::dp_ds`].
+    pub fn dp_dst(&self, index: u32) -> Option<(DVec3, DVec3)> {
         let uv = self.uv_corners(index)?;
         let [p0, p1, p2] = self.corners(index);
         let (ds1, dt1) = ((uv[1][0] - uv[0][0]) as f64, (uv[1][1] - uv[0][1]) as f64);
         let (ds2, dt2) = ((uv[2][0] - uv[0][0]) as f64, (uv[2][1] - uv[0][1]) as f64);
         let det = ds1 * dt2 - ds2 * dt1;
-        (det.abs() > 1e-20).then(|| ((p1 - p0) * dt2 - (p2 - p0) * dt1) / det)
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        (det.abs() > 1e-20).then(|| ((e1 * dt2 - e2 * dt1) / det, (e2 * ds1 - e1 * ds2) / det))
     }
 
     fn uv_corners(&self, index: u32) -> Option<[[f32; 2]; 3]> {

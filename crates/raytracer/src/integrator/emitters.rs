@@ -271,7 +271,7 @@ impl<'s> Emitters<'s> {
                     margin: 0.0,
                 })
             }
-            Emitter::Spot { position, axis, intensity, cos_beam, cos_cutoff } => {
+            Emitter::Spot { position, axis, intensity, cos_beam, cos_cutoff, texture, to_local } => {
                 let to = *position - p;
                 let d2 = to.length_squared();
                 if d2 <= 0.0 {
@@ -288,10 +288,19 @@ impl<'s> Emitters<'s> {
                     let (cutoff, beam) = (cos_cutoff.acos(), cos_beam.acos());
                     ((cutoff - cos.clamp(-1.0, 1.0).acos()) / (cutoff - beam)).clamp(0.0, 1.0)
                 };
+                let tint = match texture {
+                    Some(t) => {
+                        // Mitsuba's projection through the cone: the cutoff's edge at 0 and 1.
+                        let d = *to_local * -wi;
+                        let k = 0.5 / (d.z * (1.0 - cos_cutoff * cos_cutoff).sqrt() / cos_cutoff);
+                        self.scene.texture_at(t, 0.5 + k * d.x, 0.5 + k * d.y)
+                    }
+                    None => DVec3::ONE,
+                };
                 Some(EmitterSample {
                     wi,
                     target: *position,
-                    radiance: *intensity * (falloff / d2),
+                    radiance: *intensity * tint * (falloff / d2),
                     pdf: choice,
                     delta: true,
                     margin: 0.0,

@@ -22,18 +22,34 @@ use crate::prepare::{Interaction, PreparedScene};
 const RR_MAX_SURVIVAL: f64 = 0.95;
 
 /// The local shading frame at a surface point: `n` the shading normal as the shape defines it
-/// (not turned towards the viewer), `t` and `b` tangents.
+/// (not turned towards the viewer), or as a `normalmap` / `bumpmap` perturbs it, `t` and `b`
+/// tangents.
 #[derive(Clone, Copy, Debug)]
 struct Frame {
     t: DVec3,
     b: DVec3,
     n: DVec3,
+    /// The unperturbed shading normal, when the frame is perturbed.
+    base: Option<DVec3>,
 }
 
 impl Frame {
     fn at(scene: &PreparedScene, at: &Interaction) -> Frame {
         let (t, b, n) = scene.shading_frame(at);
-        Frame { t, b, n }
+        match scene.perturbed_frame(at, (t, b, n)) {
+            Some((t2, b2, n2)) => Frame { t: t2, b: b2, n: n2, base: Some(n) },
+            None => Frame { t, b, n, base: None },
+        }
+    }
+
+    /// Whether the world direction `w` towards a light is on the same side of the perturbed and
+    /// of the unperturbed normal (Mitsuba's `normalmap` and `bumpmap` scatter nothing else).
+    #[inline]
+    fn admits(self, w: DVec3) -> bool {
+        match self.base {
+            Some(n0) => n0.dot(w) * self.n.dot(w) > 0.0,
+            None => true,
+        }
     }
 
     #[inline]
@@ -128,6 +144,7 @@ impl<'s> PhysicalTracer<'s> {
             let (u, u1, u2) = (rng.uniform(), rng.uniform(), rng.uniform());
             if bsdf.has_smooth()
                 && let Some(ls) = self.emitters.sample(at.point, u, u1, u2)
+                && frame.admits(ls.wi)
             {
                 let wi = frame.to_local(ls.wi);
                 let f = bsdf.eval(wo, wi);
@@ -138,13 +155,17 @@ impl<'s> PhysicalTracer<'s> {
             }
             let (u, u1, u2) = (rng.uniform(), rng.uniform(), rng.uniform());
             let Some(s) = bsdf.sample(wo, u, u1, u2) else { break };
+            let wi = frame.to_world(s.wi);
+            if !frame.admits(wi) {
+                break;
+            }
             beta *= s.weight;
             if beta == DVec3::ZERO || !beta.is_finite() {
                 break;
             }
             eta *= s.eta;
             previous = if s.delta { None } else { Some((at.point, s.pdf)) };
-            ray = at.spawn(frame.to_world(s.wi));
+            ray = at.spawn(wi);
             if depth >= self.rr_depth {
                 let q = (beta.max_element() * eta * eta).min(RR_MAX_SURVIVAL);
                 if rng.uniform() >= q {

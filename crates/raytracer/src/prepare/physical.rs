@@ -13,7 +13,7 @@ use super::{Interaction, PreparedScene};
 use crate::base::memory::MemoryBudget;
 use crate::geometry::{Shape, ShapePart};
 use crate::light::Emitter;
-use crate::material::{Material, Param, TextureSpec};
+use crate::material::{Material, Param, Perturbation, TextureSpec};
 use crate::scene::mitsuba::transform::coordinate_system;
 use crate::scene::{Diagnostic, Location, Scene, Severity};
 use crate::texture::{Bitmap, TextureError};
@@ -91,6 +91,14 @@ pub(super) struct Physical {
 fn bitmap_specs(scene: &Scene) -> Vec<&Arc<TextureSpec>> {
     let mut seen = HashMap::new();
     let mut out = Vec::new();
+    for e in &scene.emitters {
+        if let Emitter::Spot { texture: Some(t), .. } = e
+            && matches!(**t, TextureSpec::Bitmap { .. })
+            && seen.insert(Arc::as_ptr(t) as usize, ()).is_none()
+        {
+            out.push(t);
+        }
+    }
     for p in &scene.primitives {
         if matches!(*p.material, Material::Course(_)) {
             continue;
@@ -240,6 +248,92 @@ impl PreparedScene {
         (t, n.cross(t), n)
     }
 
+    /// `(dp/du, dp/dv)` at an interaction as Mitsuba's shapes define them: a mesh's over its
+    /// texture coordinates, a sphere's over `(phi / 2 pi, theta / pi)`; `None` for other shapes
+    /// or a mesh without (or with degenerate) texture coordinates.
+    pub fn surface_derivatives(&self, at: &Interaction) -> Option<(DVec3, DVec3)> {
+        let shape = &self.scene.primitives[at.primitive as usize].shape;
+        match (shape, at.part) {
+            (Shape::Mesh(m), ShapePart::Triangle { index, .. }) => m.dp_dst(index),
+            (Shape::Sphere(s), _) => {
+                let d = at.point - s.centre;
+                let rho = d.x.hypot(d.y);
+                let dpdu = DVec3::new(-d.y, d.x, 0.0) * TAU;
+                let dpdv = if rho > 0.0 {
+                    DVec3::new(d.z * d.x / rho, d.z * d.y / rho, -rho) * PI
+                } else {
+                    DVec3::new(d.z, 0.0, 0.0) * PI
+                };
+                Some((dpdu, dpdv))
+            }
+            _ => None,
+        }
+    }
+
+    /// The shading frame of a `normalmap` or `bumpmap` that is the outermost material at `at`
+    /// (Mitsuba's `frame()` of those plugins), given the unperturbed `frame` (`(t, b, n)` of
+    /// [`PreparedScene::shading_frame`]); `None` for any other material.
+    ///
+    /// `normalmap`: `n' = normalize(2 c - 1)` in `frame`. `bumpmap`: `dp/du` and `dp/dv` moved
+    /// along `n` to `dp/du + n (scale dh/du - n . dp/du)` (likewise for `v`), `n'` their cross
+    /// product turned to the geometric normal's side. The tangent is then Mitsuba's
+    /// Gram-Schmidt of `dp/du` against `n'` with `n'` in the local frame and `dp/du` in world
+    /// coordinates, as Mitsuba 3.9 computes it (only anisotropic BSDFs see the difference).
+    pub fn perturbed_frame(
+        &self,
+        at: &Interaction,
+        frame: (DVec3, DVec3, DVec3),
+    ) -> Option<(DVec3, DVec3, DVec3)> {
+        let Material::Perturbed { perturbation, .. } =
+            &*self.scene.primitives[at.primitive as usize].material
+        else {
+            return None;
+        };
+        let (t, b, n) = frame;
+        let derivatives = self.surface_derivatives(at);
+        let dpdu = derivatives.map_or(t, |d| d.0);
+        let local_n = match perturbation {
+            Perturbation::NormalMap(p) => (self.param(p, at) * 2.0 - DVec3::ONE).try_normalize()?,
+            Perturbation::BumpMap { height, scale } => {
+                let (gu, gv) = self.scalar_gradient(height, at);
+                let dpdv = derivatives.map_or(b, |d| d.1);
+                let du = dpdu + n * (scale * gu - n.dot(dpdu));
+                let dv = dpdv + n * (scale * gv - n.dot(dpdv));
+                let mut world = du.cross(dv).try_normalize()?;
+                let geometric = if at.front { at.geometric } else { -at.geometric };
+                if geometric.dot(world) < 0.0 {
+                    world = -world;
+                }
+                DVec3::new(world.dot(t), world.dot(b), world.dot(n))
+            }
+        };
+        let s = (dpdu - local_n * local_n.dot(dpdu))
+            .try_normalize()
+            .unwrap_or_else(|| coordinate_system(local_n).0);
+        let to_world = |v: DVec3| t * v.x + b * v.y + n * v.z;
+        let (s, n2) = (to_world(s), to_world(local_n));
+        Some((s, n2.cross(s), n2))
+    }
+
+    /// The gradient in texture coordinates of a scalar parameter (Mitsuba's `eval_1_grad`): a
+    /// bilinear bitmap's luminance gradient through its `to_uv`; 0 for constants, checkerboards
+    /// and nearest-texel bitmaps (as Mitsuba).
+    pub fn scalar_gradient(&self, param: &Param, at: &Interaction) -> (f64, f64) {
+        let Param::Texture(spec) = param else { return (0.0, 0.0) };
+        let TextureSpec::Bitmap { nearest: false, wrap, to_uv, .. } = &**spec else { return (0.0, 0.0) };
+        let Some(bitmap) = self.physical.bitmaps.get(&(Arc::as_ptr(spec) as usize)) else {
+            return (0.0, 0.0);
+        };
+        let (u, v) = self.surface_uv(at);
+        let p = to_uv.transform_point2(glam::DVec2::new(u, v));
+        let (gx, gy) = bitmap.luminance_gradient(p.x, p.y, *wrap);
+        // Through the affine map by its transposed linear part, then the resolution, in
+        // Mitsuba's order (exact for a `to_uv` without rotation or shear).
+        let m = to_uv.matrix2;
+        let (w, h) = (bitmap.width() as f64, bitmap.height() as f64);
+        (w * (m.x_axis.x * gx + m.x_axis.y * gy), h * (m.y_axis.x * gx + m.y_axis.y * gy))
+    }
+
     /// A colour parameter at an interaction.
     #[inline]
     pub fn param(&self, param: &Param, at: &Interaction) -> DVec3 {
@@ -251,6 +345,12 @@ impl PreparedScene {
 
     fn texture_value(&self, spec: &Arc<TextureSpec>, at: &Interaction) -> DVec3 {
         let (u, v) = self.surface_uv(at);
+        self.texture_at(spec, u, v)
+    }
+
+    /// A texture's value at texture coordinates `(u, v)` (before its `to_uv`); black for a
+    /// bitmap the scene did not load.
+    pub fn texture_at(&self, spec: &Arc<TextureSpec>, u: f64, v: f64) -> DVec3 {
         match &**spec {
             TextureSpec::Bitmap { nearest, wrap, to_uv, .. } => {
                 let p = to_uv.transform_point2(glam::DVec2::new(u, v));

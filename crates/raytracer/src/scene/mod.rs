@@ -169,6 +169,10 @@ pub struct CameraSettings {
     /// The image's up direction (unit, at right angles to `dir`), when the file gives one
     /// (Mitsuba's `lookat`); course files take the world's `+z` ([`crate::camera`]).
     pub up: Option<DVec3>,
+    /// A parallel projection (Mitsuba's `orthographic` sensor): every ray goes along `dir`
+    /// from the plane through `eye` at right angles to it, and `lens_width` x `lens_height`
+    /// is the size of the visible rectangle in scene units. Course cameras are perspective.
+    pub orthographic: bool,
 }
 
 /// The light-transport model named by the camera key `algorithm=` (students' renderers of the
@@ -228,6 +232,7 @@ impl Default for CameraSettings {
             photons: PhotonSettings::default(),
             algorithm: None,
             up: None,
+            orthographic: false,
         }
     }
 }

@@ -337,7 +337,11 @@ pub(crate) fn leaf_lobe(material: &Material, param: &mut dyn FnMut(&Param) -> DV
                 d,
             ))
         }
-        Material::Course(_) | Material::TwoSided { .. } | Material::Mask { .. } | Material::Blend { .. } => {
+        Material::Course(_)
+        | Material::TwoSided { .. }
+        | Material::Mask { .. }
+        | Material::Blend { .. }
+        | Material::Perturbed { .. } => {
             return None;
         }
     })

@@ -132,6 +132,8 @@ fn walk(
             walk(first, Reach { weight: at.weight * (1.0 - t), ..at }, param, out);
             walk(second, Reach { weight: at.weight * t, ..at }, param, out);
         }
+        // The frame is perturbed by the integrator (outermost level only).
+        Material::Perturbed { material, .. } => walk(material, at, param, out),
         leaf => {
             if let Some(lobe) = leaf_lobe(leaf, param) {
                 out(Component { weight: at.weight, side: at.side, flip: at.flip, lobe });

@@ -4,7 +4,9 @@ use std::sync::Arc;
 
 use super::super::{Plugin, PluginKind, Value};
 use super::{Builder, Props, metal_ior, named_ior};
-use crate::material::{Coating, Distribution, Interface, MAX_COMPONENTS, Material, Metal, Microfacet, Param};
+use crate::material::{
+    Coating, Distribution, Interface, MAX_COMPONENTS, Material, Metal, Microfacet, Param, Perturbation,
+};
 use crate::scene::Diagnostic;
 
 /// Mitsuba's default inside index of dielectrics (`bk7`).
@@ -28,6 +30,13 @@ impl<'a> Builder<'a> {
                 "this BSDF nests {} BSDFs (through twosided, mask and blendbsdf); rayterra renders at most {MAX_COMPONENTS}",
                 m.component_count()
             )));
+        }
+        if m.nests_perturbation() {
+            self.warn(
+                &props,
+                "a `normalmap` or `bumpmap` inside this BSDF is rendered without its perturbation: \
+                 rayterra applies them only as a surface's outermost BSDF",
+            );
         }
         self.finish(&props);
         self.materials.insert(key, m.clone());
@@ -74,14 +83,33 @@ impl<'a> Builder<'a> {
                 }
             }
             "null" => Material::Mask { opacity: Param::scalar(0.0), material: Box::new(default_material()) },
-            "bumpmap" | "normalmap" => {
+            "normalmap" => {
                 let inner = self.nested_materials(props, 1, 1)?;
-                let what = if props.type_name() == "bumpmap" { "bumps" } else { "normal map" };
-                self.warn(props, &format!("its material is rendered without the {what}"));
-                props.ignore("scale");
-                props.ignore("flip_invalid_normals");
-                let _ = props.children(PluginKind::Texture);
-                (*inner[0]).clone()
+                let Some(texture) = props.named_child("normalmap").filter(|t| t.kind == PluginKind::Texture)
+                else {
+                    return Err(props.error("the `normalmap` BSDF needs a <texture name=\"normalmap\">"));
+                };
+                let normals = self.texture(texture)?;
+                Material::Perturbed {
+                    perturbation: Perturbation::NormalMap(normals),
+                    material: Box::new((*inner[0]).clone()),
+                }
+            }
+            "bumpmap" => {
+                let inner = self.nested_materials(props, 1, 1)?;
+                let textures = props.children(PluginKind::Texture);
+                if textures.len() != 1 {
+                    return Err(props.error(format!(
+                        "the `bumpmap` BSDF holds 1 nested <texture> (the height), not {}",
+                        textures.len()
+                    )));
+                }
+                let height = self.texture(textures[0].1)?;
+                let scale = props.float("scale", 1.0)?;
+                Material::Perturbed {
+                    perturbation: Perturbation::BumpMap { height, scale },
+                    material: Box::new((*inner[0]).clone()),
+                }
             }
             _ => {
                 self.warn(

@@ -2,9 +2,10 @@
 
 use glam::{DMat3, DVec3, DVec4};
 
-use super::super::Plugin;
+use super::super::{Plugin, PluginKind};
 use super::{Builder, Props};
 use crate::light::Emitter;
+use crate::material::Param;
 use crate::scene::Diagnostic;
 
 impl<'a> Builder<'a> {
@@ -28,9 +29,27 @@ impl<'a> Builder<'a> {
                 if cutoff >= 90.0 {
                     return Err(props.error("`cutoff_angle` must be under 90 degrees"));
                 }
-                if props.named_child("texture").is_some() {
-                    self.diagnostics
-                        .push(props.warning("the spot's texture is not supported: it shines uniformly"));
+                let texture = match props.named_child("texture") {
+                    None => None,
+                    Some(t) if t.kind == PluginKind::Texture => match self.texture(t)? {
+                        Param::Texture(spec) => Some(spec),
+                        Param::Constant(_) => {
+                            return Err(props.error_at(
+                                t.pos,
+                                "the spot's `texture` must vary (a bitmap or a checkerboard), as in Mitsuba",
+                            ));
+                        }
+                    },
+                    Some(other) => {
+                        return Err(props.error_at(
+                            other.pos,
+                            format!("the spot's `texture` must be a <texture>, not a <{}>", other.kind.tag()),
+                        ));
+                    }
+                };
+                let linear = DMat3::from_mat4(to_world);
+                if linear.determinant().abs() < 1e-300 {
+                    return Err(props.error("the spot's `to_world` is singular"));
                 }
                 Emitter::Spot {
                     position: to_world.transform_point3(DVec3::ZERO),
@@ -38,6 +57,8 @@ impl<'a> Builder<'a> {
                     intensity: props.color("intensity")?.unwrap_or(DVec3::ONE),
                     cos_beam: beam.to_radians().cos(),
                     cos_cutoff: cutoff.to_radians().cos(),
+                    texture,
+                    to_local: linear.inverse(),
                 }
             }
             "directional" => {

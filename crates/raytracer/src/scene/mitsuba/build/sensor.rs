@@ -3,7 +3,8 @@
 //!
 //! Mitsuba's camera looks along its local `+z` with `+y` up; its `to_world` places it. The image
 //! plane at distance 1 spans `2 tan(fov / 2)` along the `fov_axis`, the other side following the
-//! film's aspect ratio.
+//! film's aspect ratio. An `orthographic` sensor shows its local `[-1, 1] x [-1/aspect, 1/aspect]`
+//! as `to_world` places and scales it, with parallel rays along its `+z` from the near plane.
 
 use glam::{DVec3, DVec4};
 
@@ -25,12 +26,14 @@ impl<'a> Builder<'a> {
             return Ok(());
         }
         self.sensor_seen = true;
-        let thin_lens = match props.type_name() {
-            "perspective" => false,
-            "thinlens" => true,
+        let (thin_lens, orthographic) = match props.type_name() {
+            "perspective" => (false, false),
+            "thinlens" => (true, false),
+            "orthographic" => (false, true),
             other => {
                 return Err(props.error(format!(
-                    "the sensor `{other}` is not supported: rayterra renders `perspective` and `thinlens` sensors"
+                    "the sensor `{other}` is not supported: rayterra renders `perspective`, `thinlens` \
+                     and `orthographic` sensors"
                 )));
             }
         };
@@ -59,7 +62,8 @@ impl<'a> Builder<'a> {
         let to_world = props.transform("to_world")?;
         let eye = to_world.transform_point3(DVec3::ZERO);
         let forward = (to_world * DVec4::new(0.0, 0.0, 1.0, 0.0)).truncate();
-        let up = (to_world * DVec4::new(0.0, 1.0, 0.0, 0.0)).truncate();
+        let up_axis = (to_world * DVec4::new(0.0, 1.0, 0.0, 0.0)).truncate();
+        let up = up_axis;
         let left = (to_world * DVec4::new(1.0, 0.0, 0.0, 0.0)).truncate();
         let Some(dir) = forward.try_normalize() else {
             return Err(props.error("the sensor's `to_world` has no viewing direction"));
@@ -76,6 +80,26 @@ impl<'a> Builder<'a> {
         }
 
         let aspect = width as f64 / height as f64;
+        if orthographic {
+            // Mitsuba's camera space shows x in [-1, 1] and y in [-1/aspect, 1/aspect] (the
+            // film's aspect); `to_world` scales it. Rays start on the near plane.
+            let near = props.positive("near_clip", 1e-2)?;
+            props.ignore("far_clip");
+            for ignored in ["shutter_open", "shutter_close", "srf"] {
+                props.ignore(ignored);
+            }
+            let cam = &mut self.scene.camera;
+            cam.eye = to_world.transform_point3(DVec3::new(0.0, 0.0, near));
+            cam.dir = dir;
+            cam.up = Some(up);
+            cam.lens_width = 2.0 * left.length();
+            cam.lens_height = 2.0 * (up_axis.length() / aspect);
+            cam.image_width = width;
+            cam.image_height = height;
+            cam.orthographic = true;
+            self.finish(&props);
+            return Ok(());
+        }
         let axes = ["x", "y", "diagonal", "smaller", "larger"];
         let (tan_half, axis) = match props.get("fov") {
             Some(_) => {

@@ -140,3 +140,129 @@ fn named_iors_and_metals_resolve() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A unit sphere at the origin with `bsdf`, and the interaction (with its unperturbed and its
+/// perturbed frame) where the ray from `+x` meets it.
+#[allow(clippy::type_complexity)]
+fn sphere_frames(bsdf: &str) -> ((DVec3, DVec3, DVec3), Option<(DVec3, DVec3, DVec3)>, Vec<String>) {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="sphere"><float name="radius" value="1"/>{bsdf}</shape></scene>"#
+    ));
+    let warnings = b.diagnostics.iter().map(|d| d.message.clone()).collect();
+    let scene = crate::PreparedScene::new(b.scene, &Default::default()).expect("prepares");
+    let ray = crate::geometry::Ray::new(DVec3::new(5.0, 0.2, 0.3), DVec3::new(-1.0, 0.0, 0.0));
+    let (primitive, hit) = scene.closest_surface(&ray).expect("hits");
+    let at = scene.interaction(&ray, primitive, hit);
+    let frame = scene.shading_frame(&at);
+    (frame, scene.perturbed_frame(&at, frame), warnings)
+}
+
+fn close(a: DVec3, b: DVec3) -> bool {
+    (a - b).length() < 1e-9
+}
+
+#[test]
+fn normal_and_bump_maps_perturb_the_shading_frame_as_mitsuba() {
+    let nested = r#"<bsdf type="diffuse"/>"#;
+    // A flat normal map, (0.5, 0.5, 1), leaves the frame as it is.
+    let flat = format!(
+        r#"<bsdf type="normalmap"><texture name="normalmap" type="checkerboard">
+           <rgb name="color0" value="0.5, 0.5, 1"/><rgb name="color1" value="0.5, 0.5, 1"/></texture>{nested}</bsdf>"#
+    );
+    // (The tangent turns: Mitsuba's Gram-Schmidt takes the world dp/du as local coordinates.)
+    let ((_, _, n), perturbed, _) = sphere_frames(&flat);
+    let (t2, b2, n2) = perturbed.expect("a normal map perturbs");
+    assert!(close(n, n2), "{n} {n2}");
+    assert!(t2.dot(n2).abs() < 1e-9 && close(n2.cross(t2), b2) && (t2.length() - 1.0).abs() < 1e-9);
+    // (1, 0.5, 0.5) is the first tangent: the normal turns to dp/du.
+    let tilted = format!(
+        r#"<bsdf type="normalmap"><texture name="normalmap" type="checkerboard">
+           <rgb name="color0" value="1, 0.5, 0.5"/><rgb name="color1" value="1, 0.5, 0.5"/></texture>{nested}</bsdf>"#
+    );
+    let ((t, _, n), perturbed, _) = sphere_frames(&tilted);
+    let (t2, b2, n2) = perturbed.expect("perturbs");
+    assert!(close(n2, t), "{n2} {t}");
+    assert!(t2.dot(n2).abs() < 1e-9 && b2.dot(n2).abs() < 1e-9 && (t2.length() - 1.0).abs() < 1e-9);
+    assert!(n2.dot(n).abs() < 1e-9);
+    // A constant height has no gradient: the bumped normal is the shading normal.
+    let bump = format!(
+        r#"<bsdf type="bumpmap"><float name="scale" value="3"/><texture type="checkerboard">
+           <rgb name="color0" value="0.2"/><rgb name="color1" value="0.2"/></texture>{nested}</bsdf>"#
+    );
+    let ((_, _, n), perturbed, _) = sphere_frames(&bump);
+    assert!(close(perturbed.expect("perturbs").2, n));
+    // Without a map the frame is not perturbed.
+    assert!(sphere_frames(nested).1.is_none());
+    // Nested in a wrapper, the map is not applied, and the builder says so.
+    let (_, perturbed, warnings) = sphere_frames(&format!(r#"<bsdf type="twosided">{tilted}</bsdf>"#));
+    assert!(perturbed.is_none());
+    assert!(warnings.iter().any(|w| w.contains("outermost")), "{warnings:?}");
+}
+
+#[test]
+fn normal_and_bump_maps_need_their_texture() {
+    let nested = r#"<bsdf type="diffuse"/>"#;
+    let e = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="sphere"><bsdf type="normalmap">{nested}</bsdf></shape></scene>"#
+    ));
+    assert!(e.iter().any(|m| m.contains("normalmap")), "{e:?}");
+    let e = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="sphere"><bsdf type="bumpmap">{nested}</bsdf></shape></scene>"#
+    ));
+    assert!(e.iter().any(|m| m.contains("1 nested <texture>")), "{e:?}");
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="sphere"><bsdf type="bumpmap"><float name="scale" value="0.5"/>
+           <texture type="checkerboard"/>{nested}</bsdf></shape></scene>"#
+    ));
+    match &*b.scene.primitives[0].material {
+        Material::Perturbed {
+            perturbation: crate::material::Perturbation::BumpMap { scale, .. },
+            material,
+        } => {
+            assert_eq!(*scale, 0.5);
+            assert!(matches!(**material, Material::Diffuse { .. }));
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn an_orthographic_sensor_shows_its_to_world_scaled_square() {
+    let b = built(
+        r#"<scene version="3.0.0"><sensor type="orthographic">
+            <transform name="to_world"><scale x="2" y="3"/>
+                <lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="32"/></film>
+        </sensor></scene>"#,
+    );
+    let cam = &b.scene.camera;
+    assert!(cam.orthographic);
+    assert!((cam.dir - -DVec3::Z).length() < 1e-12);
+    // Rays start on the near plane (0.01 along the view).
+    assert!((cam.eye - DVec3::new(0.0, 0.0, 4.99)).length() < 1e-12, "{}", cam.eye);
+    // x in [-1, 1] scaled by 2; y in [-1/aspect, 1/aspect] scaled by 3.
+    assert!((cam.lens_width - 4.0).abs() < 1e-12 && (cam.lens_height - 3.0).abs() < 1e-12);
+    let e = errors(r#"<scene version="3.0.0"><sensor type="radiancemeter"/></scene>"#);
+    assert!(e.iter().any(|m| m.contains("`orthographic`")), "{e:?}");
+}
+
+#[test]
+fn a_spot_keeps_its_texture_and_frame() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<emitter type="spot">
+            <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+            <texture name="texture" type="checkerboard"/></emitter></scene>"#
+    ));
+    match &b.scene.emitters[0] {
+        Emitter::Spot { texture, to_local, axis, .. } => {
+            assert!(texture.is_some());
+            // The axis is the spot's local +z.
+            assert!((*to_local * *axis - DVec3::Z).length() < 1e-12, "{}", *to_local * *axis);
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<emitter type="spot"><bsdf name="texture" type="diffuse"/></emitter></scene>"#
+    ));
+    assert!(e.iter().any(|m| m.contains("must be a <texture>")), "{e:?}");
+}
