@@ -67,7 +67,11 @@ def main():
         dr.eval(image)
         dr.sync_thread()
     render = time.perf_counter() - t1
-    mi.util.write_bitmap(a.output, image)
+    # An `aov` integrator's film holds its AOVs after the colour: keep the colour.
+    import numpy as np
+
+    pixels = np.array(image)
+    mi.util.write_bitmap(a.output, pixels[..., :3] if pixels.ndim == 3 and pixels.shape[2] > 3 else pixels)
     spp = a.spp or sensor.sampler().sample_count()
     size = sensor.film().crop_size()
     print(f"mitsuba: render {render:.3f} s, load {load:.3f} s, {spp * size[0] * size[1]} samples")

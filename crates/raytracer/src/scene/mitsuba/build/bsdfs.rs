@@ -69,12 +69,12 @@ impl<'a> Builder<'a> {
                 Material::TwoSided { front, back }
             }
             "mask" => {
-                let opacity = self.param(props, "opacity", 0.5)?;
+                let opacity = self.scalar_param(props, "opacity", 0.5)?;
                 let inner = self.nested_materials(props, 1, 1)?;
                 Material::Mask { opacity, material: Box::new((*inner[0]).clone()) }
             }
             "blendbsdf" => {
-                let weight = self.param(props, "weight", 0.5)?;
+                let weight = self.scalar_param(props, "weight", 0.5)?;
                 let inner = self.nested_materials(props, 2, 2)?;
                 Material::Blend {
                     weight,
@@ -193,9 +193,9 @@ impl<'a> Builder<'a> {
         };
         let has_uv = props.plugin.property("alpha_u").is_some() || props.named_child("alpha_u").is_some();
         let (alpha_u, alpha_v) = if anisotropic && has_uv {
-            (self.param(props, "alpha_u", 0.1)?, self.param(props, "alpha_v", 0.1)?)
+            (self.scalar_param(props, "alpha_u", 0.1)?, self.scalar_param(props, "alpha_v", 0.1)?)
         } else {
-            let a = self.param(props, "alpha", 0.1)?;
+            let a = self.scalar_param(props, "alpha", 0.1)?;
             (a.clone(), a)
         };
         Ok(Microfacet {

@@ -158,6 +158,27 @@ impl<'a> Builder<'a> {
         }
     }
 
+    /// A scalar parameter (a roughness, an opacity, a weight), read as [`Builder::param`] reads a
+    /// colour, but for one quirk of Mitsuba 3 (3.9.1): its `checkerboard` gives scalar reads
+    /// (`eval_1`) the other phase than colour reads (`eval`), `color1` where `color0` would be.
+    /// A checkerboard read as a scalar is built with its colours swapped, so that it reads as
+    /// Mitsuba reads it.
+    fn scalar_param(&mut self, props: &Props<'a>, name: &str, default: f64) -> Result<Param, Diagnostic> {
+        Ok(match self.param(props, name, default)? {
+            Param::Texture(t) => match &*t {
+                TextureSpec::Checkerboard { color0, color1, to_uv } => {
+                    Param::Texture(Arc::new(TextureSpec::Checkerboard {
+                        color0: *color1,
+                        color1: *color0,
+                        to_uv: *to_uv,
+                    }))
+                }
+                _ => Param::Texture(t),
+            },
+            constant => constant,
+        })
+    }
+
     /// `<integrator>`: the path tracer's settings.
     fn integrator(&mut self, plugin: &'a Plugin) -> Result<(), Diagnostic> {
         let props = Props::new(self.doc, plugin);

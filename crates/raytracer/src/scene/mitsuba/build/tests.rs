@@ -266,3 +266,34 @@ fn a_spot_keeps_its_texture_and_frame() {
     ));
     assert!(e.iter().any(|m| m.contains("must be a <texture>")), "{e:?}");
 }
+
+#[test]
+fn a_checkerboard_read_as_a_scalar_takes_mitsubas_other_phase() {
+    // Mitsuba 3.9.1's checkerboard gives `eval_1` (a roughness, an opacity) `color1` where `eval`
+    // (a colour) gives `color0`: the scalar reading is built with the colours swapped.
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <shape type="cube"><bsdf type="roughconductor">
+            <texture name="alpha" type="checkerboard"><float name="color0" value="0.05"/><float name="color1" value="0.3"/></texture>
+        </bsdf></shape>
+        <shape type="cube"><bsdf type="diffuse">
+            <texture name="reflectance" type="checkerboard"><float name="color0" value="0.05"/><float name="color1" value="0.3"/></texture>
+        </bsdf></shape>
+        </scene>"#
+    ));
+    let colours = |p: &Param| match p {
+        Param::Texture(t) => match &**t {
+            crate::material::TextureSpec::Checkerboard { color0, color1, .. } => (color0.x, color1.x),
+            other => panic!("{other:?}"),
+        },
+        other => panic!("{other:?}"),
+    };
+    match &*b.scene.primitives[0].material {
+        Material::RoughConductor { microfacet, .. } => assert_eq!(colours(&microfacet.alpha_u), (0.3, 0.05)),
+        other => panic!("{other:?}"),
+    }
+    match &*b.scene.primitives[1].material {
+        Material::Diffuse { reflectance } => assert_eq!(colours(reflectance), (0.05, 0.3)),
+        other => panic!("{other:?}"),
+    }
+}
