@@ -158,10 +158,13 @@ fn with_search_folders(path: &Path, data: &Path) -> PathBuf {
     wrapper
 }
 
+/// A scene prepared for the comparison: ours, the files it was read from, its definitions.
+type Prepared = (PreparedScene, Vec<PathBuf>, Vec<(String, String)>);
+
 /// Our scene, prepared, the files it was read from and the definitions it takes (the test's
 /// `-D spp` only where the scene uses it: Mitsuba refuses unused ones), or why it is not compared
 /// (a plugin rayterra does not have).
-fn prepare(path: &Path) -> Result<(PreparedScene, Vec<PathBuf>, Vec<(String, String)>), String> {
+fn prepare(path: &Path) -> Result<Prepared, String> {
     let mut defines = defines();
     let mut doc = mitsuba::read_file(path, &defines).map_err(|e| format!("unreadable: {e}"))?;
     if doc.warnings.iter().any(|d| d.message.contains("is not used by the scene")) {
