@@ -68,6 +68,33 @@ pub fn uniform_cone_pdf(cos_max: f64) -> f64 {
     1.0 / (TAU * (1.0 - cos_max))
 }
 
+/// A direction from `p` uniform in the cone the sphere (`centre`, `radius`) fills seen from
+/// `p`, with the distance along it to the sphere's nearer surface (tangent at worst) and the
+/// cone's density per steradian; `None` from inside the sphere (which sees no outer surface).
+#[inline]
+pub fn sphere_cone(p: DVec3, centre: DVec3, radius: f64, u1: f64, u2: f64) -> Option<(DVec3, f64, f64)> {
+    let axis = centre - p;
+    let d2 = axis.length_squared();
+    let r2 = radius * radius;
+    if d2 <= r2 {
+        return None;
+    }
+    let d = d2.sqrt();
+    let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
+    let wi = uniform_cone(axis / d, cos_max, u1, u2);
+    let b = -axis.dot(wi);
+    let t = -b - (b * b - (d2 - r2)).max(0.0).sqrt();
+    Some((wi, t, uniform_cone_pdf(cos_max)))
+}
+
+/// The density per steradian of [`sphere_cone`]'s directions from `p` (0 from inside).
+#[inline]
+pub fn sphere_cone_pdf(p: DVec3, centre: DVec3, radius: f64) -> f64 {
+    let d2 = (centre - p).length_squared();
+    let r2 = radius * radius;
+    if d2 <= r2 { 0.0 } else { uniform_cone_pdf((1.0 - r2 / d2).max(0.0).sqrt()) }
+}
+
 /// A discrete distribution over `0..n` with probabilities proportional to given non-negative
 /// weights, sampled by inverting its cumulative sum.
 #[derive(Clone, Debug, Default, PartialEq)]

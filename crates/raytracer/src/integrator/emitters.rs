@@ -18,7 +18,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use crate::base::sampling::{Discrete, uniform_cone, uniform_cone_pdf};
+use crate::base::sampling::{Discrete, sphere_cone, sphere_cone_pdf};
 use crate::geometry::{Bounds, MESH_ERROR_SCALE, Ray, SPAWN_OFFSET, Shape, TriangleMesh};
 use crate::light::Emitter;
 use crate::prepare::{EnvironmentMap, PreparedScene, luminance};
@@ -195,11 +195,7 @@ impl<'s> Emitters<'s> {
                 let cos = normal.dot(dir).abs();
                 if cos <= 1e-12 || *area <= 0.0 { 0.0 } else { choice * t * t / (area * cos) }
             }
-            Some(Some(AreaShape::Sphere { centre, radius })) => {
-                let d2 = (*centre - p).length_squared();
-                let r2 = radius * radius;
-                if d2 <= r2 { 0.0 } else { choice * uniform_cone_pdf((1.0 - r2 / d2).max(0.0).sqrt()) }
-            }
+            Some(Some(AreaShape::Sphere { centre, radius })) => choice * sphere_cone_pdf(p, *centre, *radius),
             _ => 0.0,
         }
     }
@@ -237,22 +233,12 @@ impl<'s> Emitters<'s> {
                     })
                 }
                 AreaShape::Sphere { centre, radius: r } => {
-                    let axis = *centre - p;
-                    let d2 = axis.length_squared();
-                    let r2 = r * r;
-                    if d2 <= r2 {
-                        return None;
-                    }
-                    let d = d2.sqrt();
-                    let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
-                    let wi = uniform_cone(axis / d, cos_max, u1, u2);
-                    let b = -axis.dot(wi);
-                    let t = -b - (b * b - (d2 - r2)).max(0.0).sqrt();
+                    let (wi, t, pdf) = sphere_cone(p, *centre, *r, u1, u2)?;
                     Some(EmitterSample {
                         wi,
                         target: p + wi * t,
                         radiance: *radiance,
-                        pdf: choice * uniform_cone_pdf(cos_max),
+                        pdf: choice * pdf,
                         delta: false,
                         margin: SPAWN_OFFSET
                             * (centre.abs().max_element() + r).max((p + wi * t).abs().max_element()),

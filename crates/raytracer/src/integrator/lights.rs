@@ -24,7 +24,7 @@ use std::f64::consts::PI;
 use glam::DVec3;
 
 use crate::base::sampler::PixelRng;
-use crate::base::sampling::{Discrete, cosine_hemisphere, uniform_cone, uniform_cone_pdf, uniform_sphere};
+use crate::base::sampling::{Discrete, cosine_hemisphere, sphere_cone, sphere_cone_pdf, uniform_sphere};
 use crate::geometry::{Bounds, Ray, Shape, offset_origin};
 use crate::light::Light;
 use crate::prepare::PreparedScene;
@@ -208,25 +208,14 @@ impl<'s> Lights<'s> {
                 })
             }
             Light::Sphere { shape, color } => {
-                let axis = shape.centre - p;
-                let d2 = axis.length_squared();
-                let r2 = shape.radius * shape.radius;
-                if d2 <= r2 {
-                    return None; // inside: the surface emits outwards only
-                }
-                let d = d2.sqrt();
-                let cos_max = (1.0 - r2 / d2).max(0.0).sqrt();
-                let wi = uniform_cone(axis / d, cos_max, u1, u2);
-                // The nearer intersection of the ray with the sphere (tangent at worst).
-                let b = -axis.dot(wi);
-                let disc = (b * b - (d2 - r2)).max(0.0);
-                let t = -b - disc.sqrt();
+                // From inside, none: the surface emits outwards only.
+                let (wi, t, pdf) = sphere_cone(p, shape.centre, shape.radius, u1, u2)?;
                 Some(LightSample {
                     light: light_index,
                     wi,
                     target: p + wi * t,
                     radiance: *color,
-                    pdf: p_light * uniform_cone_pdf(cos_max),
+                    pdf: p_light * pdf,
                     delta: false,
                 })
             }
@@ -249,14 +238,7 @@ impl<'s> Lights<'s> {
                 }
                 p_light * t * t / (self.areas[light as usize] * cos)
             }
-            Light::Sphere { shape, .. } => {
-                let d2 = (shape.centre - p).length_squared();
-                let r2 = shape.radius * shape.radius;
-                if d2 <= r2 {
-                    return 0.0;
-                }
-                p_light * uniform_cone_pdf((1.0 - r2 / d2).max(0.0).sqrt())
-            }
+            Light::Sphere { shape, .. } => p_light * sphere_cone_pdf(p, shape.centre, shape.radius),
         }
     }
 
