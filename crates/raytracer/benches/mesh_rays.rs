@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use raytracer::geometry::mesh::MeshRay;
+use raytracer::geometry::MeshRay;
 use raytracer::geometry::obj::{MeshTransform, load_obj};
 use raytracer::geometry::{TriangleIndices, TriangleMesh};
 
@@ -39,6 +39,7 @@ fn main() {
     let tris: Vec<TriangleIndices> = obj.groups.iter().flat_map(|g| g.1.iter().copied()).collect();
     let started = Instant::now();
     let mesh = TriangleMesh::new(Arc::clone(&obj.vertices), &tris);
+    mesh.build_bvh();
     let built = started.elapsed().as_secs_f64();
 
     if let (Some(rays), Some(out)) = (value("--rays"), value("--out")) {

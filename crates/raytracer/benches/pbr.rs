@@ -17,7 +17,10 @@
 //!    parameters): `scenes/cbox/cbox.xml` (256x256, 64 spp, the file's depth 6) and
 //!    `scenes/matpreview/matpreview.xml` (meshes, an environment map, a plastic; 256x192, 64 spp,
 //!    unbounded depth with Russian roulette from depth 5), from
-//!    `../shared/mitsuba-data` (skipped, loudly, without it).
+//!    `../shared/mitsuba-data` (skipped, loudly, without it); and `cbox.xml` with its small box
+//!    replaced by a ball of 1,046,528 triangles (a bumpy sphere the bench writes as a binary PLY
+//!    under `target/bench-data/`, with the scene file beside it), for a scene of a million
+//!    triangles read by both.
 //! 3. SPPM on the course's `glass-trio-area-light.txt` at 640x380: the time of a render whose
 //!    caustics are clearly visible (32 passes of 250,000 photons), with passes and photons a
 //!    second.
@@ -259,7 +262,7 @@ fn mitsuba_files(root: &Path, python: &Path, llvm: &Path, has_llvm: bool, runs: 
         return;
     }
     let d = |pairs: &[(&str, &str)]| pairs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
-    let cases = [
+    let mut cases = vec![
         XmlCase { path: data.join("scenes/cbox/cbox.xml"), defines: d(&[("res", "256")]), spp: 64 },
         XmlCase {
             path: data.join("scenes/matpreview/matpreview.xml"),
@@ -267,6 +270,10 @@ fn mitsuba_files(root: &Path, python: &Path, llvm: &Path, has_llvm: bool, runs: 
             spp: 64,
         },
     ];
+    match million_triangle_scene(root, &data) {
+        Ok(path) => cases.push(XmlCase { path, defines: d(&[("res", "256")]), spp: 64 }),
+        Err(e) => println!("**** the million-triangle scene could not be written: {e} ****"),
+    }
     let out = std::env::temp_dir().join("rayterra-bench-mitsuba-xml.exr");
     for case in &cases {
         let doc = match raytracer::scene::mitsuba::read_file(&case.path, &case.defines) {
@@ -310,4 +317,89 @@ fn mitsuba_files(root: &Path, python: &Path, llvm: &Path, has_llvm: bool, runs: 
             }
         }
     }
+}
+
+/// Rows and columns of the bumpy ball's latitude-longitude grid: 2 x 1024 x 511 = 1,046,528
+/// triangles (the rows at the poles are fans of one triangle a column).
+const BALL_GRID: (usize, usize) = (512, 1024);
+
+/// Writes (once) `target/bench-data/ball.ply`, a unit sphere whose radius varies by up to 4% in a
+/// pattern of bumps, and `cbox-million.xml` beside it: Mitsuba's `cbox.xml` with the ball, 90
+/// units across its radius, where the small box stood (paths made absolute).
+fn million_triangle_scene(root: &Path, data: &Path) -> std::io::Result<PathBuf> {
+    use std::io::Write;
+    let dir = root.join("target/bench-data");
+    std::fs::create_dir_all(&dir)?;
+    let ply = dir.join("ball.ply");
+    let (rows, cols) = BALL_GRID;
+    if !ply.is_file() {
+        let mut vertices: Vec<[f32; 3]> = vec![[0.0, 0.0, 1.0]];
+        for r in 1..rows {
+            let theta = std::f64::consts::PI * r as f64 / rows as f64;
+            for c in 0..cols {
+                let phi = std::f64::consts::TAU * c as f64 / cols as f64;
+                let bump = 1.0 + 0.04 * (7.0 * theta).sin() * (9.0 * phi).cos();
+                let (st, ct) = theta.sin_cos();
+                let (sp, cp) = phi.sin_cos();
+                vertices.push([(bump * st * cp) as f32, (bump * st * sp) as f32, (bump * ct) as f32]);
+            }
+        }
+        vertices.push([0.0, 0.0, -1.0]);
+        let ring = |r: usize, c: usize| (1 + (r - 1) * cols + c % cols) as i32;
+        let south = vertices.len() as i32 - 1;
+        let mut faces: Vec<[i32; 3]> = Vec::with_capacity(2 * cols * (rows - 1));
+        for c in 0..cols {
+            faces.push([0, ring(1, c), ring(1, c + 1)]);
+            faces.push([south, ring(rows - 1, c + 1), ring(rows - 1, c)]);
+        }
+        for r in 1..rows - 1 {
+            for c in 0..cols {
+                faces.push([ring(r, c), ring(r + 1, c), ring(r + 1, c + 1)]);
+                faces.push([ring(r, c), ring(r + 1, c + 1), ring(r, c + 1)]);
+            }
+        }
+        let mut out = Vec::with_capacity(vertices.len() * 12 + faces.len() * 13 + 256);
+        write!(
+            out,
+            "ply\nformat binary_little_endian 1.0\ncomment a bumpy ball written by rayterra's pbr bench\n\
+             element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+             element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+            vertices.len(),
+            faces.len()
+        )?;
+        for v in &vertices {
+            for x in v {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        for f in &faces {
+            out.push(3);
+            for i in f {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        let partial = dir.join("ball.ply.partial");
+        std::fs::write(&partial, out)?;
+        std::fs::rename(&partial, &ply)?;
+    }
+    let cbox = data.join("scenes/cbox");
+    let text = std::fs::read_to_string(cbox.join("cbox.xml"))?;
+    let small_box = "<string name=\"filename\" value=\"meshes/cbox_smallbox.obj\"/>";
+    if !text.contains(small_box) {
+        return Err(std::io::Error::other("cbox.xml has no small box to replace"));
+    }
+    let ball = format!(
+        "<string name=\"filename\" value=\"{}\"/>\n        <transform name=\"to_world\">\
+         <scale value=\"90\"/><translate x=\"186\" y=\"92\" z=\"170\"/></transform>",
+        ply.display()
+    );
+    let text = text
+        .replace(
+            &format!("<shape type=\"obj\">\n        {small_box}"),
+            &format!("<shape type=\"ply\">\n        {ball}"),
+        )
+        .replace("value=\"meshes/", &format!("value=\"{}/meshes/", cbox.display()));
+    let xml = dir.join("cbox-million.xml");
+    std::fs::write(&xml, text)?;
+    Ok(xml)
 }

@@ -17,14 +17,13 @@
 //! leaving a mesh start [`MESH_ERROR_SCALE`] times farther off the surface than rays leaving the
 //! double-precision shapes.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::{DVec3, Vec3};
-use wide::f32x4;
 
+use super::triangle_set::{MeshRay, TriangleSet, degenerate};
 use super::{Bounds, Ray, ShapeHit, ShapePart};
 use crate::accel::Box32;
-use crate::accel::wide::{BoxRay, BuildParams, WideBvh};
 
 /// How much larger the rounding error of a single-precision mesh hit is than that of a
 /// double-precision shape, relative to the magnitude of the coordinates: secondary rays leaving a
@@ -64,16 +63,6 @@ impl TriangleIndices {
     }
 }
 
-/// Four triangles' corners, in structure-of-arrays form: `v[corner][axis][lane]`; NaN in unused
-/// lanes (which no test passes). 144 bytes: consecutive packets start at every 16-byte offset of
-/// a cache line and each spans exactly three lines. Their triangles' indices are kept apart (in
-/// [`TriangleMesh::packet_triangles`]), as only a hit needs them.
-#[derive(Clone, Debug)]
-#[repr(C, align(16))]
-struct Packet {
-    v: [[[f32; 4]; 3]; 3],
-}
-
 /// A triangle mesh ready for rays.
 #[derive(Clone, Debug)]
 pub struct TriangleMesh {
@@ -84,10 +73,9 @@ pub struct TriangleMesh {
     normals: Vec<[u32; 3]>,
     /// Texture coordinate indices of each triangle; empty when they equal the position indices.
     uvs: Vec<[u32; 3]>,
-    packets: Vec<Packet>,
-    /// The triangles of each packet's lanes; `u32::MAX` in unused lanes.
-    packet_triangles: Vec<[u32; 4]>,
-    bvh: WideBvh,
+    /// The mesh's own BVH, built when a ray first asks the mesh alone: a prepared scene puts
+    /// every mesh's triangles in one set of its own instead (see [`TriangleSet`]).
+    accel: OnceLock<TriangleSet>,
     bounds: Bounds,
     magnitude: f64,
 }
@@ -97,142 +85,6 @@ impl PartialEq for TriangleMesh {
     fn eq(&self, other: &TriangleMesh) -> bool {
         std::ptr::eq(self, other)
     }
-}
-
-/// A ray prepared for a mesh: the box-test form and the frame of the watertight test, in single
-/// precision.
-#[derive(Clone, Copy, Debug)]
-pub struct MeshRay {
-    /// The ray for box tests.
-    pub boxes: BoxRay,
-    /// The axis permutation of the watertight test.
-    k: [usize; 3],
-    /// Its shear `[d_kx / d_kz, d_ky / d_kz, 1 / d_kz]`, in every lane.
-    shear: [f32x4; 3],
-    /// The origin's coordinates in the permuted order, in every lane (made once per ray rather
-    /// than in every packet test).
-    origin: [f32x4; 3],
-}
-
-impl MeshRay {
-    /// The single-precision form of `ray`.
-    #[inline]
-    pub fn new(ray: &Ray) -> MeshRay {
-        let origin = [ray.origin.x as f32, ray.origin.y as f32, ray.origin.z as f32];
-        let dir = [ray.dir.x as f32, ray.dir.y as f32, ray.dir.z as f32];
-        MeshRay::from_f32(origin, dir)
-    }
-
-    /// A ray from single-precision numbers (the direction need not be a unit vector: distances
-    /// are then in units of its length).
-    #[inline]
-    pub fn from_f32(origin: [f32; 3], dir: [f32; 3]) -> MeshRay {
-        let [kx, ky, kz] = super::triangle::axis_permutation(dir.map(f64::from));
-        MeshRay {
-            boxes: BoxRay::from_f32(origin, dir),
-            k: [kx, ky, kz],
-            shear: shear(dir, [kx, ky, kz]).map(f32x4::from),
-            origin: [origin[kx], origin[ky], origin[kz]].map(f32x4::from),
-        }
-    }
-}
-
-/// The shear of the watertight test, `[d_kx / d_kz, d_ky / d_kz, 1 / d_kz]`, in one 4-lane
-/// division (the same quotients as three).
-#[inline(always)]
-fn shear(dir: [f32; 3], [kx, ky, kz]: [usize; 3]) -> [f32; 3] {
-    let [x, y, z, _] = (f32x4::from([dir[kx], dir[ky], 1.0, 1.0]) / f32x4::from(dir[kz])).to_array();
-    [x, y, z]
-}
-
-/// The nearest hit in a packet closer than `t_max`: `(lane, t, b1, b2)`.
-///
-/// The four lanes are first tested together with 4-wide arithmetic (the same operations in the
-/// same order as the per-lane test, so the same numbers): a lane stays a candidate if its edge
-/// functions agree in sign and its distance lies in `(0, t_max]`, or if one of them is exactly 0
-/// (an edge in single precision, decided again in double precision). Most packets a ray reaches
-/// have no candidate; the few that do are decided lane by lane.
-#[inline(always)]
-fn packet_hit(p: &Packet, r: &MeshRay, t_max: f32) -> Option<(usize, f32, f32, f32)> {
-    let [kx, ky, kz] = r.k;
-    let [sx, sy, sz] = r.shear;
-    let [ox, oy, oz] = r.origin;
-    // Corners relative to the origin, sheared: x' = x - sx z, y' = y - sy z.
-    let corner = |c: usize| {
-        let cz = f32x4::from(p.v[c][kz]) - oz;
-        ((f32x4::from(p.v[c][kx]) - ox) - sx * cz, (f32x4::from(p.v[c][ky]) - oy) - sy * cz, sz * cz)
-    };
-    let (x0, y0, z0) = corner(0);
-    let (x1, y1, z1) = corner(1);
-    let (x2, y2, z2) = corner(2);
-    let u = x2 * y1 - y2 * x1;
-    let v = x0 * y2 - y0 * x2;
-    let w = x1 * y0 - y1 * x0;
-    let zero = f32x4::ZERO;
-    let on_edge = u.simd_eq(zero) | v.simd_eq(zero) | w.simd_eq(zero);
-    let mixed = u.fast_min(v).fast_min(w).simd_lt(zero) & u.fast_max(v).fast_max(w).simd_gt(zero);
-    let det = u + v + w;
-    let t_scaled = u * z0 + v * z1 + w * z2;
-    // 0 < t_scaled / det <= t_max, with det's sign taken off both (negation is exact); NaN (the
-    // padding of unused lanes) fails it.
-    let sign = det & f32x4::from(-0.0);
-    let (t_abs, det_abs) = (t_scaled ^ sign, det ^ sign);
-    let in_range = t_abs.simd_gt(zero) & t_abs.simd_le(f32x4::from(t_max) * det_abs);
-    let mut candidates = (on_edge | (in_range & !mixed)).to_bitmask();
-    if candidates == 0 {
-        return None;
-    }
-    let (x, y, z) = (
-        [x0, x1, x2].map(f32x4::to_array),
-        [y0, y1, y2].map(f32x4::to_array),
-        [z0, z1, z2].map(f32x4::to_array),
-    );
-    let (u, v, w) = (u.to_array(), v.to_array(), w.to_array());
-    let mut best: Option<(usize, f32, f32, f32)> = None;
-    let mut limit = t_max;
-    while candidates != 0 {
-        let l = candidates.trailing_zeros() as usize;
-        candidates &= candidates - 1;
-        let (mut ul, mut vl, mut wl) = (u[l], v[l], w[l]);
-        if ul == 0.0 || vl == 0.0 || wl == 0.0 {
-            // On an edge in single precision: decide in double precision, where the products of
-            // single-precision numbers are exact (Woop et al.'s fallback).
-            let (x0, y0, x1, y1, x2, y2) = (
-                x[0][l] as f64,
-                y[0][l] as f64,
-                x[1][l] as f64,
-                y[1][l] as f64,
-                x[2][l] as f64,
-                y[2][l] as f64,
-            );
-            ul = (x2 * y1 - y2 * x1) as f32;
-            vl = (x0 * y2 - y0 * x2) as f32;
-            wl = (x1 * y0 - y1 * x0) as f32;
-        }
-        if (ul < 0.0 || vl < 0.0 || wl < 0.0) && (ul > 0.0 || vl > 0.0 || wl > 0.0) {
-            continue;
-        }
-        let det = ul + vl + wl;
-        if det == 0.0 {
-            continue;
-        }
-        let t_scaled = ul * z[0][l] + vl * z[1][l] + wl * z[2][l];
-        let outside = if det < 0.0 {
-            t_scaled >= 0.0 || t_scaled < limit * det
-        } else {
-            t_scaled <= 0.0 || t_scaled > limit * det
-        };
-        if outside {
-            continue;
-        }
-        let inv = 1.0 / det;
-        let t = t_scaled * inv;
-        if t < limit {
-            limit = t;
-            best = Some((l, t, vl * inv, wl * inv));
-        }
-    }
-    best
 }
 
 impl TriangleMesh {
@@ -258,48 +110,34 @@ impl TriangleMesh {
         } else {
             tris.iter().map(|t| t.uv).collect()
         };
-        // Each triangle's box, made on the builder's threads; a degenerate triangle's is empty,
-        // which leaves it out.
-        let triangle_box = |i: usize| {
-            let t = &positions[i];
-            if corners_degenerate(pos, t) {
-                Box32::EMPTY
-            } else {
-                Box32::around(&[pos[t[0] as usize], pos[t[1] as usize], pos[t[2] as usize]])
-            }
-        };
-        let mut bvh = WideBvh::build_with(positions.len(), triangle_box, BuildParams::TRIANGLES);
-        // Pack each leaf's triangles into packets of four, in leaf order.
-        let order = bvh.order().to_vec();
-        let mut packets = Vec::with_capacity(order.len() / 3 + 1);
-        let mut packet_triangles = Vec::with_capacity(packets.capacity());
-        let mut packet_of_leaf = Vec::new();
-        for (first, count) in bvh.leaves() {
-            let start = packets.len() as u32;
-            for chunk in order[first as usize..(first + count) as usize].chunks(4) {
-                let mut p = Packet { v: [[[f32::NAN; 4]; 3]; 3] };
-                let mut ids = [NONE; 4];
-                for (lane, &tri) in chunk.iter().enumerate() {
-                    for (corner, &vertex) in p.v.iter_mut().zip(&positions[tri as usize]) {
-                        for (axis, value) in corner.iter_mut().zip(pos[vertex as usize]) {
-                            axis[lane] = value;
-                        }
-                    }
-                    ids[lane] = tri;
-                }
-                packets.push(p);
-                packet_triangles.push(ids);
-            }
-            packet_of_leaf.push((first, start, packets.len() as u32 - start));
-        }
-        bvh.remap_leaves(|first, _| {
-            let i = packet_of_leaf.partition_point(|&(f, _, _)| f < first);
-            let (_, start, count) = packet_of_leaf[i];
-            (start, count)
-        });
-        let bounds = bvh.bounds().map_or(Bounds::EMPTY, Box32::to_bounds);
+        // The box around the triangles a ray can hit (the degenerate ones left out).
+        let bounds = positions
+            .iter()
+            .map(|t| t.map(|i| pos[i as usize]))
+            .filter(|c| !degenerate(c))
+            .fold(None, |b: Option<Box32>, c| {
+                Some(b.map_or(Box32::around(&c), |b| b.union(Box32::around(&c))))
+            })
+            .map_or(Bounds::EMPTY, Box32::to_bounds);
         let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element().max(0.0);
-        TriangleMesh { vertices, positions, normals, uvs, packets, packet_triangles, bvh, bounds, magnitude }
+        TriangleMesh { vertices, positions, normals, uvs, accel: OnceLock::new(), bounds, magnitude }
+    }
+
+    /// Builds the mesh's own BVH now (otherwise the first ray that asks the mesh alone builds
+    /// it): for callers that time the build apart from the rays.
+    pub fn build_bvh(&self) {
+        self.accel();
+    }
+
+    /// The mesh's own BVH over its triangles, built at the first call.
+    fn accel(&self) -> &TriangleSet {
+        self.accel.get_or_init(|| TriangleSet::build(self.positions.len(), |i| self.corners_f32(i as u32)))
+    }
+
+    /// The corners of triangle `index` in single precision, as stored.
+    #[inline]
+    pub fn corners_f32(&self, index: u32) -> [[f32; 3]; 3] {
+        self.positions[index as usize].map(|i| self.vertices.positions[i as usize])
     }
 
     /// Number of triangles.
@@ -317,11 +155,11 @@ impl TriangleMesh {
         &self.vertices
     }
 
-    /// Bytes of the triangles' indices, packets and BVH (not the shared vertex data).
+    /// Bytes of the triangles' indices, and of the mesh's own BVH if a ray has built it (not the
+    /// shared vertex data).
     pub fn memory(&self) -> usize {
         (self.positions.len() + self.normals.len() + self.uvs.len()) * 12
-            + self.packets.len() * (std::mem::size_of::<Packet>() + std::mem::size_of::<[u32; 4]>())
-            + self.bvh.memory()
+            + self.accel.get().map_or(0, TriangleSet::memory)
     }
 
     /// The nearest hit with `0 < t < t_max` (`t_max` may be infinite).
@@ -335,19 +173,7 @@ impl TriangleMesh {
     /// The nearest hit of a single-precision ray closer than `t_max`: `(triangle, t, b1, b2)`.
     #[inline]
     pub fn intersect_f32(&self, ray: &MeshRay, t_max: f32) -> Option<(u32, f32, f32, f32)> {
-        // The packet and lane of the nearest hit; its triangle is looked up once, at the end.
-        let mut best = None;
-        self.bvh.traverse(&ray.boxes, t_max, |first, count, limit| {
-            let mut limit = limit;
-            for i in first as usize..(first + count) as usize {
-                if let Some((lane, t, b1, b2)) = packet_hit(&self.packets[i], ray, limit) {
-                    limit = t;
-                    best = Some((i, lane, t, b1, b2));
-                }
-            }
-            limit
-        });
-        best.map(|(i, lane, t, b1, b2)| (self.packet_triangles[i][lane], t, b1, b2))
+        self.accel().intersect(ray, t_max)
     }
 
     /// Whether any triangle lies on the ray closer than `t_max`.
@@ -359,17 +185,7 @@ impl TriangleMesh {
     /// Whether any triangle lies on a single-precision ray closer than `t_max`.
     #[inline]
     pub fn occluded_f32(&self, ray: &MeshRay, t_max: f32) -> bool {
-        let mut found = false;
-        self.bvh.traverse(&ray.boxes, t_max, |first, count, limit| {
-            for p in &self.packets[first as usize..(first + count) as usize] {
-                if packet_hit(p, ray, limit).is_some() {
-                    found = true;
-                    return -1.0;
-                }
-            }
-            limit
-        });
-        found
+        self.accel().occluded(ray, t_max)
     }
 
     /// The corners of triangle `index` in double precision.
@@ -490,13 +306,6 @@ impl TriangleMesh {
     pub fn magnitude(&self) -> f64 {
         self.magnitude
     }
-}
-
-/// Whether a triangle's corners are collinear or coincide (in single precision).
-fn corners_degenerate(pos: &[[f32; 3]], t: &[u32; 3]) -> bool {
-    let p = t.map(|i| Vec3::from(pos[i as usize]));
-    let n = (p[1] - p[0]).cross(p[2] - p[0]);
-    n == Vec3::ZERO || !n.is_finite()
 }
 
 fn to_dvec(p: [f32; 3]) -> DVec3 {

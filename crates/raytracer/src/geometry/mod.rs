@@ -20,6 +20,7 @@ pub mod serialized;
 mod sphere;
 mod square;
 pub mod triangle;
+pub mod triangle_set;
 
 pub use crate::base::bounds::Bounds;
 pub use crate::base::ray::{Ray, SPAWN_OFFSET, offset_origin};
@@ -31,6 +32,7 @@ pub use plane::Plane;
 pub use sphere::Sphere;
 pub use square::Square;
 pub use triangle::Triangle;
+pub use triangle_set::{MeshRay, TriangleSet};
 
 use std::sync::Arc;
 

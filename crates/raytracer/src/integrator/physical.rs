@@ -87,11 +87,11 @@ impl<'s> PhysicalTracer<'s> {
         }
     }
 
-    /// The BSDF of the primitive at `at`, its parameters looked up there.
+    /// Makes `bsdf` the BSDF of the primitive at `at`, its parameters looked up there.
     #[inline]
-    pub fn bsdf(&self, at: &Interaction) -> PhysicalBsdf {
+    pub fn bsdf_at(&self, at: &Interaction, bsdf: &mut PhysicalBsdf) {
         let material = self.scene.material(at.primitive);
-        PhysicalBsdf::new(material, &mut |p| self.scene.param(p, at))
+        bsdf.rebuild(material, &mut |p| self.scene.param(p, at));
     }
 
     /// The radiance arriving along `ray` (one sample), drawing from `rng`.
@@ -104,6 +104,8 @@ impl<'s> PhysicalTracer<'s> {
         let mut previous: Option<(DVec3, f64)> = None;
         let mut eta = 1.0;
         let mut depth = 0u32;
+        // One BSDF for the whole path, refilled at every vertex.
+        let mut bsdf = PhysicalBsdf::default();
         loop {
             out.rays += 1;
             let seen = !(depth == 0 && self.hide_emitters);
@@ -138,7 +140,7 @@ impl<'s> PhysicalTracer<'s> {
             if depth >= self.max_depth {
                 break;
             }
-            let bsdf = self.bsdf(&at);
+            self.bsdf_at(&at, &mut bsdf);
             let frame = Frame::at(scene, &at);
             let wo = frame.to_local(-ray.dir);
             let (u, u1, u2) = (rng.uniform(), rng.uniform(), rng.uniform());

@@ -10,6 +10,7 @@ mod load;
 mod physical;
 mod queries;
 mod search;
+mod triangles;
 
 pub use interaction::Interaction;
 use load::{load_meshes, load_textures};
@@ -17,6 +18,7 @@ pub use physical::{EnvironmentMap, luminance};
 use physical::{Physical, load_physical};
 use queries::FlatSet;
 pub use search::{Located, TextureSearch};
+use triangles::SceneTriangles;
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -75,9 +77,11 @@ pub struct PreparedScene {
     /// For each primitive, the indices of its texture and of its normal map ([`NO_TEXTURE`]:
     /// none).
     texture_of: Vec<[u32; 2]>,
-    /// BVH over the bounded primitives, when there are more than [`FLAT_LIMIT`]; its items are
-    /// the primitives' indices.
+    /// BVH over the bounded primitives other than meshes, when there are more than
+    /// [`FLAT_LIMIT`]; its items are the primitives' indices.
     bvh: WideBvh,
+    /// Every mesh's triangles, in one tree of their own.
+    triangles: SceneTriangles,
     /// Primitives tested one by one: the unbounded ones (planes), and all bounded ones too when
     /// there are at most [`FLAT_LIMIT`] (a loop beats a tree walk for a handful of shapes).
     linear: FlatSet,
@@ -165,27 +169,38 @@ impl PreparedScene {
             TextureSource::Builtin(_) => None,
         }));
 
-        // The unbounded primitives (planes) are tested one by one, and so are all when there are
-        // few bounded ones; the others go into a BVH whose items are the primitives, each with its
-        // box (the unbounded ones get the empty box, which the BVH leaves out).
+        // The meshes' triangles go into one tree of their own. Of the other primitives, the
+        // unbounded ones (planes) are tested one by one, and so are all when there are few
+        // bounded ones; the others go into a BVH whose items are the primitives, each with its
+        // box (the unbounded ones and the meshes get the empty box, which the BVH leaves out).
         let prims = &scene.primitives;
+        let triangles = match SceneTriangles::build(prims) {
+            Ok(triangles) => triangles,
+            Err(error) => {
+                budget.release(memory_used);
+                return Err(vec![error]);
+            }
+        };
+        let is_mesh = |p: &Primitive| matches!(p.shape, Shape::Mesh(_));
         let mut linear: Vec<u32> = prims
             .par_iter()
             .enumerate()
-            .filter(|(_, p)| !p.shape.is_bounded())
+            .filter(|(_, p)| !p.shape.is_bounded() && !is_mesh(p))
             .map(|(i, _)| i as u32)
             .collect();
-        // A mesh is a tree walk of its own: a loop over meshes would start every one of them.
-        let has_mesh = prims.iter().any(|p| matches!(p.shape, Shape::Mesh(_)));
-        let bvh_items = if prims.len() - linear.len() <= FLAT_LIMIT && !has_mesh {
-            linear = (0..prims.len() as u32).collect();
+        let others = prims.iter().filter(|p| p.shape.is_bounded() && !is_mesh(p)).count();
+        let bvh_items = if others <= FLAT_LIMIT {
+            linear = (0..prims.len() as u32).filter(|&i| !is_mesh(&prims[i as usize])).collect();
             0
         } else {
             prims.len()
         };
         let bvh = WideBvh::build_with(
             bvh_items,
-            |i| prims[i].shape.bounds().map_or(Box32::EMPTY, |b| Box32::from_bounds(&b)),
+            |i| match prims[i].shape.bounds() {
+                Some(b) if !is_mesh(&prims[i]) => Box32::from_bounds(&b),
+                _ => Box32::EMPTY,
+            },
             BuildParams::SHAPES,
         );
         let linear = FlatSet::new(&linear, &scene);
@@ -197,6 +212,7 @@ impl PreparedScene {
             .collect();
         Ok(PreparedScene {
             bvh,
+            triangles,
             linear,
             emitter_squares: emitters
                 .iter()
@@ -217,10 +233,11 @@ impl PreparedScene {
         })
     }
 
-    /// The triangles of the scene's meshes and the memory they take.
+    /// The triangles of the scene's meshes and the memory they take (with the tree over all of
+    /// them).
     pub fn mesh_stats(&self) -> MeshStats {
         let mut seen: Vec<*const crate::geometry::MeshVertices> = Vec::new();
-        let mut stats = MeshStats::default();
+        let mut stats = MeshStats { triangles: 0, bytes: self.triangles.memory() };
         for p in &self.scene.primitives {
             if let Shape::Mesh(m) = &p.shape {
                 stats.triangles += m.len();

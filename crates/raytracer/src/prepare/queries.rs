@@ -41,10 +41,16 @@ impl PreparedScene {
     #[inline]
     pub fn closest_surface(&self, ray: &Ray) -> Option<(u32, ShapeHit)> {
         let mut best = self.linear.closest(ray, f64::INFINITY);
+        let mut t_max = best.map_or(f64::INFINITY, |(_, h)| h.t);
+        if !self.triangles.is_empty()
+            && let Some(hit) = self.triangles.closest(ray, t_max)
+        {
+            t_max = hit.1.t;
+            best = Some(hit);
+        }
         if self.bvh.is_empty() {
             return best;
         }
-        let mut t_max = best.map_or(f64::INFINITY, |(_, h)| h.t);
         let prims = &self.scene.primitives;
         let items = self.bvh.order();
         self.bvh.traverse(&BoxRay::new(ray), box_limit(t_max), |first, count, _| {
@@ -62,7 +68,8 @@ impl PreparedScene {
     /// Whether any primitive lies on the ray before distance `t_max` (lights never block).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_max: f64) -> bool {
-        if self.linear.any(ray, t_max) {
+        if self.linear.any(ray, t_max) || (!self.triangles.is_empty() && self.triangles.occluded(ray, t_max))
+        {
             return true;
         }
         if self.bvh.is_empty() {

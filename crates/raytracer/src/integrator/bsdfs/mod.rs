@@ -58,6 +58,7 @@ pub mod wrappers;
 mod tests;
 
 use glam::DVec3;
+use smallvec::SmallVec;
 
 use crate::material::{Material, Param};
 use conductor::{Conductor, RoughConductor};
@@ -181,13 +182,15 @@ impl Lobe {
 }
 
 /// A physically based BSDF at one surface point, every parameter already evaluated (no
-/// textures here): up to [`MAX_COMPONENTS`] weighted [`Lobe`]s in a fixed array (no heap
+/// textures here): up to [`MAX_COMPONENTS`] weighted [`Lobe`]s kept inline (no heap
 /// allocation, except the first use of a `roughplastic` table on a thread). Local frame and
 /// conventions: see the module documentation.
-#[derive(Clone, Debug)]
+///
+/// A path keeps one and refills it at every vertex ([`PhysicalBsdf::rebuild`]): the slots are
+/// neither cleared nor copied, only the components a material has are written.
+#[derive(Clone, Debug, Default)]
 pub struct PhysicalBsdf {
-    components: [Component; MAX_COMPONENTS],
-    len: usize,
+    components: SmallVec<[Component; MAX_COMPONENTS]>,
 }
 
 impl PhysicalBsdf {
@@ -195,19 +198,25 @@ impl PhysicalBsdf {
     /// parameters take the `.x` of what it returns). A [`Material::Course`] has no physically
     /// based BSDF and gives a black one (the course's lobes are `integrator::bsdf`'s).
     pub fn new(material: &Material, param: &mut dyn FnMut(&Param) -> DVec3) -> PhysicalBsdf {
-        let mut bsdf = PhysicalBsdf { components: [Component::EMPTY; MAX_COMPONENTS], len: 0 };
+        let mut bsdf = PhysicalBsdf::default();
+        bsdf.rebuild(material, param);
+        bsdf
+    }
+
+    /// Makes this the BSDF of `material`, as [`PhysicalBsdf::new`] builds it, in place.
+    pub fn rebuild(&mut self, material: &Material, param: &mut dyn FnMut(&Param) -> DVec3) {
+        let components = &mut self.components;
+        components.clear();
         wrappers::flatten(material, param, &mut |c| {
-            if bsdf.len < MAX_COMPONENTS {
-                bsdf.components[bsdf.len] = c;
-                bsdf.len += 1;
+            if components.len() < MAX_COMPONENTS {
+                components.push(c);
             }
         });
-        bsdf
     }
 
     /// The components (weighted lobes) of the BSDF.
     pub fn components(&self) -> &[Component] {
-        &self.components[..self.len]
+        &self.components
     }
 
     /// `f(wo, wi)` without the cosine factor, per RGB channel; 0 for delta components.

@@ -58,9 +58,6 @@ pub struct Component {
 }
 
 impl Component {
-    /// An unused slot.
-    pub const EMPTY: Component = Component { weight: 0.0, side: Side::Any, flip: false, lobe: Lobe::Null };
-
     /// A direction in the lobe's frame (or back: the map is its own inverse).
     #[inline]
     pub fn to_lobe(&self, w: DVec3) -> DVec3 {
