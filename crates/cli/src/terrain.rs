@@ -20,6 +20,10 @@ use terrain::{Look, SceneConfig, Settings};
 /// Largest accepted side of `--size`, in pixels (GPUs may allow less; that is checked too).
 const MAX_SIDE: u32 = 16_384;
 
+/// The largest `--grid` the island is eroded at without `--erode` (larger ones would hold up
+/// the start for minutes).
+const DEFAULT_EROSION_MAX_SIDE: u32 = 1025;
+
 /// Where the window's panel saves its settings without `--settings`.
 const DEFAULT_SETTINGS_FILE: &str = "rayterra-terrain.toml";
 
@@ -79,7 +83,8 @@ pub struct TerrainArgs {
     /// elevation data): water droplets carve valleys and channels and leave sediment (rivers end
     /// at the sea), then steep slopes slide to the talus angle. STRENGTH (0 to 10) is the
     /// droplets a sample; 0 turns erosion off. The --seed seeds the droplets. Default: 4 for the
-    /// procedural island in the modern look, no erosion for a --heightmap or the course look.
+    /// procedural island in the modern look up to --grid 1025, no erosion for a --heightmap, the
+    /// course look or a larger island.
     #[arg(long, value_name = "STRENGTH", value_parser = parse_strength, conflicts_with = "assets",
           allow_hyphen_values = true)]
     erode: Option<f32>,
@@ -575,15 +580,24 @@ fn no_display_message(reason: &str) -> String {
 
 /// The STRENGTH to erode the heights with, if any: `--erode` (0 for none), else
 /// [`erosion::ISLAND_STRENGTH`] for the procedural island in the modern look (the course look
-/// keeps the course's picture exactly), none for other heights or with `--no-erode`.
+/// keeps the course's picture exactly) up to [`DEFAULT_EROSION_MAX_SIDE`] samples a side, none
+/// for other heights or with `--no-erode`.
 fn erosion_strength(args: &TerrainArgs, look: Look) -> Option<f32> {
     if args.no_erode {
         return None;
     }
     match args.erode {
         Some(strength) => (strength > 0.0).then_some(strength),
-        None => (args.heightmap.is_none() && args.assets.is_none() && look == Look::Modern)
-            .then_some(erosion::ISLAND_STRENGTH),
+        None if args.heightmap.is_some() || args.assets.is_some() || look != Look::Modern => None,
+        None if args.grid > DEFAULT_EROSION_MAX_SIDE => {
+            errln!(
+                "note: the island is not eroded by default above {DEFAULT_EROSION_MAX_SIDE} samples a side \
+                 (it would take minutes); --erode {} erodes it anyway",
+                erosion::ISLAND_STRENGTH
+            );
+            None
+        }
+        None => Some(erosion::ISLAND_STRENGTH),
     }
 }
 

@@ -142,6 +142,11 @@ fn the_island_is_eroded_by_default_and_can_be_left_alone() {
     assert!(course == off, "the course look's island was eroded");
     let (course_eroded, _) = heights("course-eroded.tif", &["--look", "course", "--erode", "4"]);
     assert!(course_eroded == default);
+    // A huge island is not held up for minutes by default.
+    let out = scratch("large.png");
+    let text = export_ok(None, &["--grid", "1026", "export", "--heightmap", out.to_str().expect("utf-8")]);
+    assert!(text.contains("not eroded by default above 1025 samples"), "{text}");
+    assert!(!text.contains("erosion:"), "{text}");
 }
 
 #[test]

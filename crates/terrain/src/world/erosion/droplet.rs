@@ -132,7 +132,7 @@ impl Tile {
         if self.width < 2 || self.height < 2 {
             return carried;
         }
-        let brush = Brush::new(params.radius);
+        let brush = Brush::new(params.radius, self.width);
         let (span_x, span_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
         for _ in 0..count {
             let (x, y) = (random.unit() * span_x, random.unit() * span_y);
@@ -149,7 +149,7 @@ impl Tile {
         if self.width < 2 || self.height < 2 {
             return;
         }
-        let brush = Brush::new(params.radius);
+        let brush = Brush::new(params.radius, self.width);
         let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
         for d in droplets {
             let start = State {
@@ -199,6 +199,19 @@ impl Tile {
     fn erode(&mut self, x: f32, y: f32, amount: f32, floor: f32, brush: &Brush) -> f32 {
         let (cx, cy) = ((x + 0.5) as isize, (y + 0.5) as isize);
         let (w, h) = (self.width as isize, self.height as isize);
+        let r = brush.reach;
+        if cx >= r && cy >= r && cx + r < w && cy + r < h {
+            // The whole brush is inside the tile (nearly always): its shares are known.
+            let centre = cy * w + cx;
+            let mut taken = 0.0;
+            for &(offset, share) in &brush.inside {
+                let cell = &mut self.heights[(centre + offset) as usize];
+                let take = (amount * share).min((*cell - floor).max(0.0));
+                *cell -= take;
+                taken += take;
+            }
+            return taken;
+        }
         let inside =
             |&&(dx, dy, _): &&(isize, isize, f32)| (0..w).contains(&(cx + dx)) && (0..h).contains(&(cy + dy));
         let total: f32 = brush.cells.iter().filter(inside).map(|c| c.2).sum();
@@ -289,11 +302,18 @@ impl Tile {
 
 /// The cells around a droplet it erodes, weighted by closeness.
 struct Brush {
+    /// Column and row offsets, and weight.
     cells: Vec<(isize, isize, f32)>,
+    /// The radius in whole cells.
+    reach: isize,
+    /// Offsets in a tile's samples and shares of the whole (summing to 1), for a brush wholly
+    /// inside the tile.
+    inside: Vec<(isize, f32)>,
 }
 
 impl Brush {
-    fn new(radius: u32) -> Self {
+    /// The brush of `radius` cells for a tile `width` samples wide.
+    fn new(radius: u32, width: usize) -> Self {
         let r = radius as isize;
         let mut cells = Vec::new();
         for dy in -r..=r {
@@ -304,7 +324,10 @@ impl Brush {
                 }
             }
         }
-        Self { cells }
+        let total: f32 = cells.iter().map(|c| c.2).sum();
+        let inside =
+            cells.iter().map(|&(dx, dy, weight)| (dy * width as isize + dx, weight / total)).collect();
+        Self { cells, reach: r, inside }
     }
 }
 
@@ -334,6 +357,50 @@ mod tests {
         assert!(moved > 100.0, "the droplets moved {moved}");
         let change = (sum(&after) - sum(&before)).abs();
         assert!(change < 1e-4 * moved, "mass changed by {change} of {moved} moved");
+    }
+
+    #[test]
+    fn droplets_leaving_a_tile_inside_the_grid_are_handed_on_with_their_sediment() {
+        // A grid of 64 x 16 falling toward +x; a tile of its first 32 columns.
+        let (columns, rows) = (64u32, 16u32);
+        let grid: Vec<f32> = (0..columns * rows).map(|i| 100.0 - (i % columns) as f32 * 0.8).collect();
+        let mut tile = Tile::copy_from(&grid, (columns, rows), 0, 0, 32, rows);
+        let before: f64 = tile.heights.iter().map(|&h| f64::from(h)).sum();
+        let carried = tile.run(200, &DropletParams::default(), f32::NEG_INFINITY, &mut SplitMix64::new(7));
+        assert!(carried.len() > 150, "{} handed on", carried.len());
+        assert!(carried.iter().all(|d| d.x >= 30.0 && d.x <= 31.0 && d.steps_left > 0), "{carried:?}");
+        // What the tile lost, the handed-on droplets carry.
+        let after: f64 = tile.heights.iter().map(|&h| f64::from(h)).sum();
+        let carried_soil: f64 = carried.iter().map(|d| f64::from(d.sediment)).sum();
+        assert!(carried_soil > 0.0);
+        assert!(
+            (before - after - carried_soil).abs() < 1e-3 * carried_soil,
+            "{before} {after} {carried_soil}"
+        );
+        // The tile of the grid's last 32 columns takes them on, and they stop at the grid's edge.
+        let mut next = Tile::copy_from(&grid, (columns, rows), 30, 0, 34, rows);
+        let start: f64 = next.heights.iter().map(|&h| f64::from(h)).sum();
+        next.resume(&carried, &DropletParams::default(), f32::NEG_INFINITY);
+        let end: f64 = next.heights.iter().map(|&h| f64::from(h)).sum();
+        assert!((end - start - carried_soil).abs() < 1e-3 * carried_soil, "{start} {end} {carried_soil}");
+        // A tile that is the whole grid hands nothing on.
+        let mut whole = Tile::new(columns as usize, rows as usize, grid);
+        assert!(
+            whole.run(200, &DropletParams::default(), f32::NEG_INFINITY, &mut SplitMix64::new(7)).is_empty()
+        );
+    }
+
+    #[test]
+    fn droplets_end_at_the_sea() {
+        // A slope wholly under the sea: droplets end where they start, carrying nothing.
+        let heights: Vec<f32> = (0..32 * 32).map(|i| 10.0 - (i % 32) as f32 * 0.5).collect();
+        let mut tile = Tile::new(32, 32, heights.clone());
+        tile.run(500, &DropletParams::default(), 20.0, &mut SplitMix64::new(2));
+        assert_eq!(tile.into_heights(), heights);
+        // Above it, they erode.
+        let mut tile = Tile::new(32, 32, heights.clone());
+        tile.run(500, &DropletParams::default(), -100.0, &mut SplitMix64::new(2));
+        assert_ne!(tile.into_heights(), heights);
     }
 
     #[test]
