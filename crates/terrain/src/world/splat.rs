@@ -221,6 +221,42 @@ mod tests {
     }
 
     #[test]
+    fn the_shader_still_works_the_shares_out_as_ported_here() {
+        // `weights` is a port of these lines of the terrain shader: when they change, change it.
+        let shader: String = include_str!("../render/grid_modern.wgsl").split_whitespace().collect();
+        for line in [
+            "let rock = smoothstep(rock_slope * 0.85, rock_slope * 1.15, slope + 0.12 * rock_slope * (broad - 0.5));",
+            "let scree = smoothstep(rock_slope * 0.35, rock_slope * 0.7, slope) * smoothstep(-0.05, 0.35, curvature) * (1.0 - rock);",
+            "let band = 0.3 * abs(scene.ground.w) + 1e-4;",
+            "let sand = (1.0 - smoothstep(scene.ground.w - band, scene.ground.w + band, height + 0.02 * top * (broad - 0.5))) * (1.0 - smoothstep(0.1, 0.25, slope));",
+            "let line = scene.ground.z + 0.12 * top * normal.z + 0.08 * top * (broad - 0.5);",
+            "let snow = smoothstep(line - 0.03 * top, line + 0.03 * top, height) * (1.0 - smoothstep(rock_slope * 1.1, rock_slope * 1.6, slope));",
+            "out.shares = vec4<f32>(rock * (1.0 - snow), scree * (1.0 - snow), sand * (1.0 - rock) * (1.0 - snow), snow);",
+            "let w_grass = max(1.0 - w_rock - w_scree - w_sand - w_snow, 0.0);",
+            "let broad = textureSampleLevel(detail_map, wrap, out.uv * grid.detail_repeat, 0.0).g;",
+            "let normal = normalize(vec3<f32>(nxz.x, sqrt(max(1.0 - dot(nxz, nxz), 0.0)), nxz.y));",
+            "let curvature = shape.b * 2.0 - 1.0;",
+        ] {
+            let line: String = line.split_whitespace().collect();
+            assert!(
+                shader.contains(&line),
+                "the shader no longer has `{line}`: port the change to `weights`"
+            );
+        }
+        // And `GroundLines::new` of these lines of the uniforms.
+        let uniforms: String = include_str!("../render/lighting.rs").split_whitespace().collect();
+        for line in [
+            "let top = config.height_of_level(255.0).max(1e-3);",
+            "1.0 - ground.rock_slope_degrees.to_radians().cos(), ground.snow_line * top,",
+            "if config.sea { ground.sand_line * top } else { -1e4 },",
+            "ground_scale: [1.0 / (ground.texture_size * config.terrain_length), ground.detail, top, 0.0],",
+        ] {
+            let line: String = line.split_whitespace().collect();
+            assert!(uniforms.contains(&line), "lighting.rs no longer has `{line}`: port the change");
+        }
+    }
+
+    #[test]
     fn without_a_sea_there_is_no_shore() {
         let config = SceneConfig { sea: false, ..SceneConfig::default() };
         let lines = GroundLines::new(&GroundSettings::default(), &config);
