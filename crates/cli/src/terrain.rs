@@ -878,6 +878,15 @@ mod tests {
     }
 
     #[test]
+    fn a_strength_of_zero_means_no_erosion() {
+        assert_eq!(parse_strength("0"), Ok(0.0));
+        assert_eq!(parse_strength("2.5"), Ok(2.5));
+        for bad in ["-1", "10.5", "nan", "inf", "x"] {
+            assert!(parse_strength(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
     fn field_of_view_and_time() {
         assert_eq!(parse_fov("60"), Ok(60.0));
         assert!(parse_fov("0.5").is_err());
