@@ -20,6 +20,10 @@ use terrain::{Look, SceneConfig, Settings};
 /// Largest accepted side of `--size`, in pixels (GPUs may allow less; that is checked too).
 const MAX_SIDE: u32 = 16_384;
 
+/// The largest `--grid` the island is eroded at without `--erode` (larger ones would hold up
+/// the start for minutes).
+const DEFAULT_EROSION_MAX_SIDE: u32 = 1025;
+
 /// Where the window's panel saves its settings without `--settings`.
 const DEFAULT_SETTINGS_FILE: &str = "rayterra-terrain.toml";
 
@@ -30,8 +34,9 @@ fn after_help() -> String {
          rayterra terrain --assets ../shared/course-assets/terrain\n  rayterra terrain --heightmap dem.png\n  \
          rayterra terrain --heightmap N42E001.hgt --water-level 1500\n  \
          rayterra terrain --screenshot island.png --size 1280x720 --camera 0,2.5,10,0,0 --time 3\n  \
-         rayterra terrain --look course\n  rayterra terrain --erode 1 --seed 2\n  \
-         rayterra terrain --heightmap dem.tif --erode 2 --export-heightmap eroded.tif\n  rayterra terrain --settings sunset.toml --screenshot sunset.png",
+         rayterra terrain --look course\n  rayterra terrain --no-erode --seed 2\n  \
+         rayterra terrain export --heightmap island.tif --splat island-splat.png\n  \
+         rayterra terrain --heightmap dem.tif --erode 2 export --heightmap eroded.tif\n  rayterra terrain --settings sunset.toml --screenshot sunset.png",
         controls::help()
     )
 }
@@ -75,16 +80,20 @@ pub struct TerrainArgs {
     max_size: Option<u32>,
 
     /// Erode the heights before drawing them (any heightmap: the procedural island, an image or
-    /// elevation data): water droplets carve valleys and leave sediment, then steep slopes slide
-    /// to the talus angle. STRENGTH (greater than 0, at most 10) is the droplets a sample; 1 is
-    /// a good start. The --seed seeds the droplets. Default: no erosion.
+    /// elevation data): water droplets carve valleys and channels and leave sediment (rivers end
+    /// at the sea), then steep slopes slide to the talus angle. STRENGTH (0 to 10) is the
+    /// droplets a sample; 0 turns erosion off. The --seed seeds the droplets. Default: 4 for the
+    /// procedural island in the modern look up to --grid 1025, no erosion for a --heightmap, the
+    /// course look or a larger island.
     #[arg(long, value_name = "STRENGTH", value_parser = parse_strength, conflicts_with = "assets",
           allow_hyphen_values = true)]
     erode: Option<f32>,
 
-    /// Write the heights (eroded with --erode) to FILE and exit: .tif as 32-bit float samples
-    /// (metres for elevation data, world units otherwise) or .png as 16-bit grey (which
-    /// --heightmap reads back as the same heights).
+    /// Do not erode the procedural island (the same as --erode 0).
+    #[arg(long, conflicts_with = "erode")]
+    no_erode: bool,
+
+    /// Write the heights (eroded) to FILE and exit; the same as `export --heightmap FILE`.
     #[arg(long, value_name = "OUT.tif|OUT.png", conflicts_with = "screenshot")]
     export_heightmap: Option<PathBuf>,
 
@@ -172,6 +181,40 @@ pub struct TerrainArgs {
     /// to inspect or edit them and load them again with --assets, then exit.
     #[arg(long, value_name = "DIR", conflicts_with = "screenshot")]
     export_assets: Option<PathBuf>,
+
+    /// What to do instead of opening a window.
+    #[command(subcommand)]
+    command: Option<TerrainCommand>,
+}
+
+/// `rayterra terrain`'s subcommands.
+#[derive(Debug, clap::Subcommand)]
+enum TerrainCommand {
+    /// Write the world's (eroded) heights and its ground materials' weights for other tools, and
+    /// exit: no window, no GPU. The world options (--heightmap FILE, --seed, --grid, --erode,
+    /// --settings, ...) go before `export`.
+    #[command(
+        after_help = "Examples:\n  rayterra terrain export --heightmap island.tif --splat island.png\n  \
+         rayterra terrain --heightmap dem.tif --erode 2 export --heightmap eroded.png"
+    )]
+    Export(ExportArgs),
+}
+
+/// Arguments of `rayterra terrain export`.
+#[derive(Debug, clap::Args)]
+#[command(group = clap::ArgGroup::new("outputs").required(true).multiple(true))]
+struct ExportArgs {
+    /// Write the heights to this file: .tif as 32-bit float samples (metres for elevation data,
+    /// world units otherwise) or .png as 16-bit grey (which --heightmap reads back as the same
+    /// heights). Row 0 is the far (-z, north) row.
+    #[arg(long, value_name = "OUT.tif|OUT.png", group = "outputs")]
+    heightmap: Option<PathBuf>,
+
+    /// Write the ground materials' weights (those the modern look draws) as 8-bit RGBA PNG: OUT.png
+    /// holds rock, scree, grass and sand in red, green, blue and alpha, OUT_1.png snow in red;
+    /// one pixel a height sample, the eight bytes of a pixel summing to 255.
+    #[arg(long, value_name = "OUT.png", group = "outputs")]
+    splat: Option<PathBuf>,
 }
 
 /// The graphics backends on the command line.
@@ -214,11 +257,11 @@ fn parse_positive(text: &str) -> Result<f64, String> {
 
 fn parse_strength(text: &str) -> Result<f32, String> {
     let strength: f32 = text.parse().map_err(|_| format!("`{text}` is not a number"))?;
+    if strength == 0.0 {
+        return Ok(0.0);
+    }
     ErosionParams::with_strength(strength, 0).map(|_| strength).map_err(|_| {
-        format!(
-            "{text} is out of range: the strength must be greater than 0 and at most {}",
-            erosion::MAX_STRENGTH
-        )
+        format!("{text} is out of range: the strength must be 0 (no erosion) to {}", erosion::MAX_STRENGTH)
     })
 }
 
@@ -284,8 +327,8 @@ pub fn run(args: TerrainArgs) -> Result<(), ExitCode> {
 }
 
 fn execute(args: TerrainArgs) -> Result<(), String> {
-    let windowed =
-        args.screenshot.is_none() && args.export_assets.is_none() && args.export_heightmap.is_none();
+    let export = export_outputs(&args)?;
+    let windowed = args.screenshot.is_none() && args.export_assets.is_none() && export.is_none();
     // Say so before any work when there is nowhere to open the window.
     if windowed && !window::display_available() {
         return Err(no_display_message("neither DISPLAY nor WAYLAND_DISPLAY is set"));
@@ -294,15 +337,10 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         // Refuse an unwritable format or folder before any work.
         terrain::output::check_output(out).map_err(|error| error.to_string())?;
     }
-    if let Some(out) = &args.export_heightmap {
-        terrain_world::export::HeightFormat::for_path(out).map_err(|error| error.to_string())?;
-    }
     let settings = load_settings(&args)?;
-    let (world, config) = load_world(&args)?;
-    if let Some(out) = &args.export_heightmap {
-        terrain_world::export::save_heightmap(&world, &config, out).map_err(|e| e.to_string())?;
-        outln!("wrote {} ({}x{} heights)", out.display(), world.heightmap.columns(), world.heightmap.rows());
-        return Ok(());
+    let (world, config) = load_world(&args, erosion_strength(&args, settings.look))?;
+    if let Some(export) = export {
+        return write_exports(&export, &world, &config, &settings);
     }
     if let Some(dir) = &args.export_assets {
         let written = terrain_world::export::save_course_folder(&world, dir).map_err(|e| e.to_string())?;
@@ -335,6 +373,64 @@ fn execute(args: TerrainArgs) -> Result<(), String> {
         Some(out) => screenshot(&args, &world, &config, &settings, &view, out),
         None => open_window(&args, &world, &config, settings, &view),
     }
+}
+
+/// What `export` (or `--export-heightmap`) writes.
+struct Exports {
+    /// The heights' file.
+    heightmap: Option<PathBuf>,
+    /// The splat map's first file (the second is named from it).
+    splat: Option<PathBuf>,
+}
+
+/// The files to export, if any, each checked (format, folder) before any work.
+fn export_outputs(args: &TerrainArgs) -> Result<Option<Exports>, String> {
+    let (heightmap, splat) = match &args.command {
+        Some(TerrainCommand::Export(export)) => {
+            if args.export_heightmap.is_some() && export.heightmap.is_some() {
+                return Err("give the heights' file once: --export-heightmap or export --heightmap".into());
+            }
+            (export.heightmap.clone().or_else(|| args.export_heightmap.clone()), export.splat.clone())
+        }
+        None => (args.export_heightmap.clone(), None),
+    };
+    if heightmap.is_none() && splat.is_none() {
+        return Ok(None);
+    }
+    if args.screenshot.is_some() || args.export_assets.is_some() {
+        return Err("export writes files instead of a screenshot or an asset folder: leave out --screenshot and --export-assets".into());
+    }
+    if let Some(out) = &heightmap {
+        terrain_world::export::HeightFormat::check(out).map_err(|error| error.to_string())?;
+    }
+    if let Some(out) = &splat {
+        terrain_world::export::splat_paths(out).map_err(|error| error.to_string())?;
+    }
+    Ok(Some(Exports { heightmap, splat }))
+}
+
+/// Writes the files of `export` for `world`.
+fn write_exports(
+    export: &Exports,
+    world: &World,
+    config: &SceneConfig,
+    settings: &Settings,
+) -> Result<(), String> {
+    let (columns, rows) = (world.heightmap.columns(), world.heightmap.rows());
+    if let Some(out) = &export.heightmap {
+        terrain_world::export::save_heightmap(world, config, out).map_err(|e| e.to_string())?;
+        outln!("wrote {} ({columns}x{rows} heights)", out.display());
+    }
+    if let Some(out) = &export.splat {
+        let map = terrain_world::splat::splat_map(world, config, &settings.ground);
+        let [first, second] = terrain_world::export::save_splat(&map, out).map_err(|e| e.to_string())?;
+        outln!(
+            "wrote {} (rock, scree, grass, sand) and {} (snow), {columns}x{rows} weights",
+            first.display(),
+            second.display()
+        );
+    }
+    Ok(())
 }
 
 /// `pose` moved where the window lets the camera go (inside the sky box, 0.2 units above the
@@ -482,15 +578,39 @@ fn no_display_message(reason: &str) -> String {
     )
 }
 
-/// Loads or generates the world the options ask for, showing progress, with the scene numbers
-/// to draw it with (the course's, or those that fit elevation data).
-fn load_world(args: &TerrainArgs) -> Result<(World, SceneConfig), String> {
+/// The STRENGTH to erode the heights with, if any: `--erode` (0 for none), else
+/// [`erosion::ISLAND_STRENGTH`] for the procedural island in the modern look (the course look
+/// keeps the course's picture exactly) up to [`DEFAULT_EROSION_MAX_SIDE`] samples a side, none
+/// for other heights or with `--no-erode`.
+fn erosion_strength(args: &TerrainArgs, look: Look) -> Option<f32> {
+    if args.no_erode {
+        return None;
+    }
+    match args.erode {
+        Some(strength) => (strength > 0.0).then_some(strength),
+        None if args.heightmap.is_some() || args.assets.is_some() || look != Look::Modern => None,
+        None if args.grid > DEFAULT_EROSION_MAX_SIDE => {
+            errln!(
+                "note: the island is not eroded by default above {DEFAULT_EROSION_MAX_SIDE} samples a side \
+                 (it would take minutes); --erode {} erodes it anyway",
+                erosion::ISLAND_STRENGTH
+            );
+            None
+        }
+        None => Some(erosion::ISLAND_STRENGTH),
+    }
+}
+
+/// Loads or generates the world the options ask for, eroded with `strength` (see
+/// [`erosion_strength`]), showing progress, with the scene numbers to draw it with (the course's,
+/// or those that fit elevation data).
+fn load_world(args: &TerrainArgs, strength: Option<f32>) -> Result<(World, SceneConfig), String> {
     let config = SceneConfig::default();
     if let Some(path) = &args.heightmap {
         let elevation = dem::is_elevation_file(path)
             .map_err(|error| format!("cannot read {}: {error}", path.display()))?;
         if elevation {
-            return load_elevation(args, path);
+            return load_elevation(args, path, strength);
         }
         let given = [
             (args.cell_size.is_some(), "--cell-size"),
@@ -505,11 +625,15 @@ fn load_world(args: &TerrainArgs) -> Result<(World, SceneConfig), String> {
             );
         }
     }
-    load_world_with(args, &config).map(|world| (world, config))
+    load_world_with(args, &config, strength).map(|world| (world, config))
 }
 
 /// Loads elevation data (metres) from `path`, with a colour map painted from its heights.
-fn load_elevation(args: &TerrainArgs, path: &Path) -> Result<(World, SceneConfig), String> {
+fn load_elevation(
+    args: &TerrainArgs,
+    path: &Path,
+    strength: Option<f32>,
+) -> Result<(World, SceneConfig), String> {
     let started = Instant::now();
     let options = dem::LoadOptions {
         cell_size: args.cell_size,
@@ -526,7 +650,7 @@ fn load_elevation(args: &TerrainArgs, path: &Path) -> Result<(World, SceneConfig
     let read = started.elapsed();
     eprintln!("elevation: {} ({})", loaded.describe(), seconds(read));
     let dem::DemScene { heightmap, config, info } = loaded.scene;
-    let (heightmap, maps) = erode_if_asked(args, heightmap, &config)?;
+    let (heightmap, maps) = erode_if_asked(args.seed, strength, heightmap, &config)?;
     let painting = spinner("painting the colour map".to_string());
     let mut world = procedural::dress_heightmap(heightmap, args.seed, &config, &mut |_| {});
     painting.finish_and_clear();
@@ -543,7 +667,7 @@ fn load_elevation(args: &TerrainArgs, path: &Path) -> Result<(World, SceneConfig
 }
 
 /// Loads or generates the world with the course's scene numbers.
-fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, String> {
+fn load_world_with(args: &TerrainArgs, config: &SceneConfig, strength: Option<f32>) -> Result<World, String> {
     let started = Instant::now();
     if let Some(dir) = &args.assets {
         let spinner = spinner(format!("loading the course assets from {}", dir.display()));
@@ -569,7 +693,7 @@ fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, St
         bar.set_position((progress.overall() * 1000.0).round() as u64);
         bar.set_message(progress.stage.describe());
     };
-    let world = match (&args.heightmap, args.erode) {
+    let world = match (&args.heightmap, strength) {
         (Some(path), None) => {
             progress(Progress { stage: Stage::Heightmap, done: 0.0 });
             Heightmap::load(path)
@@ -580,7 +704,7 @@ fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, St
             progress(Progress { stage: Stage::Heightmap, done: 0.0 });
             let heightmap = Heightmap::load(path).map_err(|error| error.to_string());
             bar.finish_and_clear();
-            let (heightmap, maps) = erode_if_asked(args, heightmap?, config)?;
+            let (heightmap, maps) = erode_if_asked(args.seed, strength, heightmap?, config)?;
             let mut world = procedural::dress_heightmap(heightmap, args.seed, config, &mut |_| {});
             world.erosion = maps;
             Ok(world)
@@ -592,7 +716,7 @@ fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, St
             });
             bar.finish_and_clear();
             let (heightmap, maps) =
-                erode_if_asked(args, heightmap.map_err(|error| error.to_string())?, config)?;
+                erode_if_asked(args.seed, strength, heightmap.map_err(|error| error.to_string())?, config)?;
             let mut world = procedural::dress_heightmap(heightmap, args.seed, config, &mut |_| {});
             world.erosion = maps;
             Ok(world)
@@ -618,17 +742,20 @@ fn load_world_with(args: &TerrainArgs, config: &SceneConfig) -> Result<World, St
     Ok(world)
 }
 
-/// The heightmap eroded as `--erode` asks (with a progress bar), with the erosion's maps; as it
-/// is without `--erode`.
+/// The heightmap eroded with `strength` (with a progress bar) and droplets seeded with `seed`,
+/// with the erosion's maps; as it is without a strength. Droplets end at the sea (y = 0) when
+/// the scene has one.
 fn erode_if_asked(
-    args: &TerrainArgs,
+    seed: u32,
+    strength: Option<f32>,
     heightmap: Heightmap,
     config: &SceneConfig,
 ) -> Result<(Heightmap, Option<erosion::ErosionMaps>), String> {
-    let Some(strength) = args.erode else {
+    let Some(strength) = strength else {
         return Ok((heightmap, None));
     };
-    let params = ErosionParams::with_strength(strength, u64::from(args.seed)).map_err(|e| e.to_string())?;
+    let mut params = ErosionParams::with_strength(strength, u64::from(seed)).map_err(|e| e.to_string())?;
+    params.sea_level = config.sea.then_some(0.0);
     let started = Instant::now();
     let bar = ProgressBar::new(1000);
     bar.set_style(
@@ -748,6 +875,15 @@ mod tests {
         assert!(shown.ends_with("Failed to open connection to X server"), "{shown}");
         assert!(!shown.contains("winit") && !shown.contains(".rs"), "{shown}");
         assert!(display_failure("no compositor").ends_with("no compositor"));
+    }
+
+    #[test]
+    fn a_strength_of_zero_means_no_erosion() {
+        assert_eq!(parse_strength("0"), Ok(0.0));
+        assert_eq!(parse_strength("2.5"), Ok(2.5));
+        for bad in ["-1", "10.5", "nan", "inf", "x"] {
+            assert!(parse_strength(bad).is_err(), "{bad}");
+        }
     }
 
     #[test]

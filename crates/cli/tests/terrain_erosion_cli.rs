@@ -1,6 +1,7 @@
-//! `rayterra terrain --erode` and `--export-heightmap` as a user runs them: the eroded island
-//! beside the uneroded one, exported heights, the same bytes at any thread count, and usage errors
-//! for a bad strength.
+//! `rayterra terrain --erode`, `--no-erode`, `export` and `--export-heightmap` as a user runs
+//! them: the island eroded by default, the eroded island beside the uneroded one, exported heights
+//! and ground weights, the same bytes at any thread count, and errors for a bad strength or a bad
+//! destination before any work.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -27,10 +28,11 @@ fn scratch(name: &str) -> PathBuf {
 fn a_bad_strength_is_a_usage_error() {
     let out = scratch("never.tif");
     let out = out.to_str().expect("utf-8 path");
-    for strength in ["0", "-1", "11", "nan", "inf"] {
+    for strength in ["-1", "11", "nan", "inf", "-0.5"] {
         let output = rayterra(&["--grid", "16", "--erode", strength, "--export-heightmap", out]);
-        assert_fails(&output, 2, "the strength must be greater than 0 and at most 10");
+        assert_fails(&output, 2, "the strength must be 0 (no erosion) to 10");
     }
+    assert_fails(&rayterra(&["--erode", "1", "--no-erode", "--export-heightmap", out]), 2, "--no-erode");
     assert_fails(&rayterra(&["--erode", "strong", "--export-heightmap", out]), 2, "`strong` is not a number");
     assert_fails(&rayterra(&["--erode", "1", "--assets", "x", "--export-heightmap", out]), 2, "--assets");
     assert_fails(&rayterra(&["--grid", "16", "--export-heightmap", "h.jpg"]), 1, "h.jpg");
@@ -44,9 +46,7 @@ fn eroded_heights_are_exported_the_same_at_one_and_two_threads() {
         let _ = std::fs::remove_file(&out);
         let mut args =
             vec!["--grid", "300", "--seed", "2", "--export-heightmap", out.to_str().expect("utf-8")];
-        if erode {
-            args.extend(["--erode", "1"]);
-        }
+        args.extend(if erode { ["--erode", "1"] } else { ["--erode", "0"] });
         let output = rayterra_with_threads(Some(threads), &args);
         assert!(output.status.success(), "{}", stderr(&output));
         if erode {
@@ -81,9 +81,7 @@ fn the_eroded_island_beside_the_uneroded_one() {
             "--backend",
             "vulkan",
         ];
-        if erode {
-            args.extend(["--erode", "2"]);
-        }
+        args.extend(if erode { ["--erode", "2"] } else { ["--erode", "0"] });
         let output = rayterra(&args);
         if no_gpu(&output) {
             return None;
@@ -108,4 +106,120 @@ fn the_eroded_island_beside_the_uneroded_one() {
     let (sky, land) = (difference(0..20), difference(150..270));
     assert!(land > 2.0, "the eroded land looks the same: mean difference {land}");
     assert!(sky < 0.5, "the sky changed: mean difference {sky}");
+}
+
+/// `rayterra terrain ARGS` (world options first, then `export` with its own), expected to work;
+/// returns its standard error.
+fn export_ok(threads: Option<usize>, args: &[&str]) -> String {
+    let output = rayterra_with_threads(threads, args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    stderr(&output)
+}
+
+#[test]
+fn the_island_is_eroded_by_default_and_can_be_left_alone() {
+    let heights = |name: &str, options: &[&str]| -> (Vec<u8>, String) {
+        let out = scratch(name);
+        let _ = std::fs::remove_file(&out);
+        let mut args = vec!["--grid", "96", "--seed", "3"];
+        args.extend_from_slice(options);
+        args.extend(["export", "--heightmap", out.to_str().expect("utf-8")]);
+        let text = export_ok(None, &args);
+        (std::fs::read(&out).expect("written"), text)
+    };
+    let (default, text) = heights("default.tif", &[]);
+    assert!(text.contains("erosion: strength 4, 96x96 samples"), "{text}");
+    let (explicit, _) = heights("explicit.tif", &["--erode", "4"]);
+    assert!(default == explicit, "the default is not --erode 4");
+    let (off, text) = heights("off.tif", &["--no-erode"]);
+    assert!(!text.contains("erosion:"), "{text}");
+    let (zero, _) = heights("zero.tif", &["--erode", "0"]);
+    assert!(off == zero, "--no-erode and --erode 0 differ");
+    assert!(off != default, "the default changed nothing");
+    // The course look keeps the course's picture: no erosion unless asked for.
+    let (course, text) = heights("course.tif", &["--look", "course"]);
+    assert!(!text.contains("erosion:"), "{text}");
+    assert!(course == off, "the course look's island was eroded");
+    let (course_eroded, _) = heights("course-eroded.tif", &["--look", "course", "--erode", "4"]);
+    assert!(course_eroded == default);
+    // A huge island is not held up for minutes by default.
+    let out = scratch("large.png");
+    let text = export_ok(None, &["--grid", "1026", "export", "--heightmap", out.to_str().expect("utf-8")]);
+    assert!(text.contains("not eroded by default above 1025 samples"), "{text}");
+    assert!(!text.contains("erosion:"), "{text}");
+}
+
+#[test]
+fn exports_heights_and_ground_weights_the_same_at_one_and_two_threads() {
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let run = |threads: usize| -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+        let (tif, splat) =
+            (dir.path().join(format!("h{threads}.tif")), dir.path().join(format!("g{threads}.png")));
+        let text = export_ok(
+            Some(threads),
+            &[
+                "--grid",
+                "200",
+                "--seed",
+                "5",
+                "export",
+                "--heightmap",
+                tif.to_str().expect("utf-8"),
+                "--splat",
+                splat.to_str().expect("utf-8"),
+            ],
+        );
+        assert!(text.contains("erosion: strength 4"), "{text}");
+        let second = dir.path().join(format!("g{threads}_1.png"));
+        let read = |path: &Path| std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        (read(&tif), read(&splat), read(&second))
+    };
+    let one = run(1);
+    let two = run(2);
+    assert!(one == two, "the exports differ between 1 and 2 threads");
+    let first = image::load_from_memory(&one.1).expect("a PNG").into_rgba8();
+    let second = image::load_from_memory(&one.2).expect("a PNG").into_rgba8();
+    assert_eq!((first.dimensions(), second.dimensions()), ((200, 200), (200, 200)));
+    // Every pixel's weights sum to 255; the island has rock, grass, sand and (high up) snow.
+    let mut most = [0u8; 5];
+    for (a, b) in first.pixels().zip(second.pixels()) {
+        let weights = [a[0], a[1], a[2], a[3], b[0]];
+        assert_eq!(weights.iter().map(|&w| u32::from(w)).sum::<u32>(), 255, "{weights:?}");
+        assert_eq!((b[1], b[2], b[3]), (0, 0, 0));
+        for (m, w) in most.iter_mut().zip(weights) {
+            *m = (*m).max(w);
+        }
+    }
+    for (name, m) in ["rock", "scree", "grass", "sand", "snow"].iter().zip(most) {
+        assert!(m > 128, "{name} is nowhere the main material: {most:?}");
+    }
+    // The old flag writes the same heights.
+    let old = dir.path().join("old.tif");
+    export_ok(None, &["--grid", "200", "--seed", "5", "--export-heightmap", old.to_str().expect("utf-8")]);
+    assert!(std::fs::read(&old).expect("written") == one.0);
+}
+
+#[test]
+fn bad_export_destinations_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().expect("temporary folder");
+    let missing = dir.path().join("no-such-folder");
+    let cases = [
+        (vec!["--splat".to_string(), dir.path().join("g.jpg").display().to_string()], "g.jpg"),
+        (vec!["--splat".to_string(), missing.join("g.png").display().to_string()], "no-such-folder"),
+        (vec!["--heightmap".to_string(), dir.path().join("h.exr").display().to_string()], "h.exr"),
+        (vec!["--heightmap".to_string(), missing.join("h.tif").display().to_string()], "no-such-folder"),
+    ];
+    for (export, needle) in cases {
+        let mut args = vec!["--grid".to_string(), "64".to_string(), "export".to_string()];
+        args.extend(export);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let output = rayterra(&args);
+        assert_fails(&output, 1, needle);
+        assert!(!stderr(&output).contains("erosion:"), "worked before refusing: {}", stderr(&output));
+    }
+    assert_fails(&rayterra(&["export"]), 2, "--splat");
+    let out = dir.path().join("h.tif");
+    let out = out.to_str().expect("utf-8");
+    assert_fails(&rayterra(&["--export-heightmap", out, "export", "--heightmap", out]), 1, "once");
+    assert!(std::fs::read_dir(dir.path()).expect("folder").next().is_none(), "a file was written");
 }

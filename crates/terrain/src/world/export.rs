@@ -7,6 +7,7 @@ use image::{DynamicImage, ImageFormat};
 
 use super::World;
 use super::assets::ASSET_FILES;
+use super::splat::SplatMap;
 use crate::config::SceneConfig;
 use crate::output::{SaveError, save_image, write_file};
 
@@ -67,6 +68,46 @@ impl HeightFormat {
             }),
         }
     }
+}
+
+impl HeightFormat {
+    /// The format for `path` (as [`Self::for_path`]), after checking that its folder takes a new
+    /// file: to refuse a bad destination before any work.
+    pub fn check(path: &Path) -> Result<Self, SaveError> {
+        let format = Self::for_path(path)?;
+        atomic_file::check_writable::<image::ImageError>(path)?;
+        Ok(format)
+    }
+}
+
+/// The two files [`save_splat`] writes for `path` (which must end in `.png`, in any case):
+/// `path` itself and, beside it, the stem with `_1` (`splat.png` and `splat_1.png`). Checks that
+/// the folder takes new files, to refuse a bad destination before any work.
+pub fn splat_paths(path: &Path) -> Result<[PathBuf; 2], SaveError> {
+    let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let stem = path.file_stem().and_then(|s| s.to_str());
+    let (Some("png"), Some(stem)) = (extension.as_deref(), stem) else {
+        return Err(SaveError::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::other("a splat map is written as .png (8-bit RGBA)"),
+        });
+    };
+    let second = path.with_file_name(format!("{stem}_1.png"));
+    for file in [path, second.as_path()] {
+        atomic_file::check_writable::<image::ImageError>(file)?;
+    }
+    Ok([path.to_path_buf(), second])
+}
+
+/// Writes the ground materials' weights `map` as two 8-bit RGBA PNG files (see
+/// [`SplatMap::images`]: rock, scree, grass, sand in the first; snow in the second's red), the
+/// files [`splat_paths`] names for `path`, each whole or not at all. Returns their paths.
+pub fn save_splat(map: &SplatMap, path: &Path) -> Result<[PathBuf; 2], SaveError> {
+    let paths = splat_paths(path)?;
+    for (image, file) in map.images().into_iter().zip(&paths) {
+        save_image(&DynamicImage::ImageRgba8(image), file, ImageFormat::Png)?;
+    }
+    Ok(paths)
 }
 
 /// Writes the heights of `world` (placed with `config`) to `path`, whole or not at all, in the
@@ -150,5 +191,27 @@ mod tests {
         assert_eq!(heights, expected);
         let error = save_heightmap(&world, &config, &dir.path().join("h.jpg")).expect_err("refused");
         assert!(error.to_string().contains("h.jpg"), "{error}");
+        let error = HeightFormat::check(&dir.path().join("missing").join("h.tif")).expect_err("refused");
+        assert!(error.to_string().contains("missing"), "{error}");
+    }
+
+    #[test]
+    fn splat_maps_are_two_rgba_pngs_whose_bytes_sum_to_255() {
+        let config = SceneConfig::default();
+        let world =
+            generate(ProceduralOptions { seed: 3, heightmap_size: 40 }, &config, &mut |_| {}).expect("valid");
+        let map =
+            crate::world::splat::splat_map(&world, &config, &crate::settings::GroundSettings::default());
+        let dir = tempfile::tempdir().expect("temporary folder");
+        let paths = save_splat(&map, &dir.path().join("ground.PNG")).expect("writable");
+        assert_eq!(paths[1], dir.path().join("ground_1.png"));
+        let first = image::open(&paths[0]).expect("a PNG").into_rgba8();
+        let second = image::open(&paths[1]).expect("a PNG").into_rgba8();
+        assert_eq!((first.dimensions(), second.dimensions()), ((40, 40), (40, 40)));
+        assert_eq!([first, second], map.images());
+        for bad in ["ground.tif", "ground", "missing/ground.png"] {
+            let error = splat_paths(&dir.path().join(bad)).expect_err("refused");
+            assert!(error.to_string().contains("ground"), "{error}");
+        }
     }
 }

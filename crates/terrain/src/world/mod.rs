@@ -17,6 +17,7 @@ pub mod mesh;
 pub mod occlusion;
 pub mod procedural;
 pub mod quadtree;
+pub mod splat;
 
 use std::path::{Path, PathBuf};
 

@@ -34,44 +34,81 @@ pub struct DropletParams {
 }
 
 impl Default for DropletParams {
+    /// Gentle droplets, many of which are needed: each takes and leaves little, so their paths
+    /// gather into channels that deepen (rather than each one planing the slope it runs down).
     fn default() -> Self {
         Self {
             inertia: 0.05,
-            capacity: 4.0,
+            capacity: 2.0,
             min_capacity: 0.01,
-            erode_rate: 0.3,
-            deposit_rate: 0.3,
+            erode_rate: 0.05,
+            deposit_rate: 0.05,
             evaporation: 0.02,
             gravity: 4.0,
-            max_steps: 40,
-            radius: 3,
+            max_steps: 80,
+            radius: 2,
         }
     }
 }
 
-/// A rectangle of heights (cell units) that droplets run on.
+/// A rectangle of heights (cell units) that droplets run on, with where it lies in its grid.
 #[derive(Debug, Clone)]
 pub struct Tile {
     width: usize,
     height: usize,
     heights: Vec<f32>,
+    /// Column and row of the tile's first sample in the grid.
+    origin: (u32, u32),
+    /// The grid's columns and rows.
+    grid: (u32, u32),
+}
+
+/// A droplet that reached the edge of its tile (not the grid's) and goes on in another tiling:
+/// where it is (grid coordinates, in cells), where it heads, its speed, water and sediment, and
+/// the steps it has left.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Carried {
+    /// Column coordinate in the grid (cells).
+    pub x: f32,
+    /// Row coordinate in the grid (cells).
+    pub y: f32,
+    dir_x: f32,
+    dir_y: f32,
+    speed: f32,
+    water: f32,
+    sediment: f32,
+    steps_left: u32,
+}
+
+/// A droplet's state as it runs.
+#[derive(Debug, Clone, Copy)]
+struct State {
+    x: f32,
+    y: f32,
+    dir_x: f32,
+    dir_y: f32,
+    speed: f32,
+    water: f32,
+    sediment: f32,
 }
 
 impl Tile {
-    /// A tile of `heights` alone.
+    /// A tile of `heights` alone (a whole grid: droplets stop at its edges).
     pub fn new(width: usize, height: usize, heights: Vec<f32>) -> Self {
         assert_eq!(heights.len(), width * height, "tile size");
-        Self { width, height, heights }
+        Self { width, height, heights, origin: (0, 0), grid: (width as u32, height as u32) }
     }
 
-    /// The `w` x `h` rectangle at column `x`, row `y` of a grid of `columns` samples a row.
-    pub fn copy_from(grid: &[f32], columns: u32, x: u32, y: u32, w: u32, h: u32) -> Self {
+    /// The `w` x `h` rectangle at column `x`, row `y` of a grid of `columns` x `rows` samples.
+    /// Droplets stop at the grid's edges; at the tile's other edges they are handed on
+    /// ([`Carried`]).
+    pub fn copy_from(grid: &[f32], (columns, rows): (u32, u32), x: u32, y: u32, w: u32, h: u32) -> Self {
         let mut heights = Vec::with_capacity(w as usize * h as usize);
         for row in y..y + h {
             let start = row as usize * columns as usize + x as usize;
             heights.extend_from_slice(&grid[start..start + w as usize]);
         }
-        Self::new(w as usize, h as usize, heights)
+        Self { origin: (x, y), grid: (columns, rows), ..Self::new(w as usize, h as usize, heights) }
     }
 
     /// The heights, row by row.
@@ -79,16 +116,52 @@ impl Tile {
         self.heights
     }
 
-    /// Runs `count` droplets one after another, their start points drawn from `random`.
-    pub fn run(&mut self, count: u64, params: &DropletParams, random: &mut SplitMix64) {
+    /// Runs `count` droplets one after another, their start points drawn from `random`. A droplet
+    /// that is (or gets) below `sea` (cell units; `f32::NEG_INFINITY` for no sea) ends there and
+    /// leaves its sediment: rivers end at the sea.
+    /// Returns, in the order they left, the droplets that reached an edge of the tile inside
+    /// the grid.
+    pub fn run(
+        &mut self,
+        count: u64,
+        params: &DropletParams,
+        sea: f32,
+        random: &mut SplitMix64,
+    ) -> Vec<Carried> {
+        let mut carried = Vec::new();
+        if self.width < 2 || self.height < 2 {
+            return carried;
+        }
+        let brush = Brush::new(params.radius, self.width);
+        let (span_x, span_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
+        for _ in 0..count {
+            let (x, y) = (random.unit() * span_x, random.unit() * span_y);
+            let start = State { x, y, dir_x: 0.0, dir_y: 0.0, speed: 1.0, water: 1.0, sediment: 0.0 };
+            carried.extend(self.droplet(start, params.max_steps, params, sea, &brush, true));
+        }
+        carried
+    }
+
+    /// Runs on, one after another, droplets handed on from another tiling (in grid coordinates,
+    /// inside this tile); those that reach this tile's edge too stop there and leave their
+    /// sediment.
+    pub fn resume(&mut self, droplets: &[Carried], params: &DropletParams, sea: f32) {
         if self.width < 2 || self.height < 2 {
             return;
         }
-        let brush = Brush::new(params.radius);
-        let (span_x, span_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
-        for _ in 0..count {
-            let start = (random.unit() * span_x, random.unit() * span_y);
-            self.droplet(start, params, &brush);
+        let brush = Brush::new(params.radius, self.width);
+        let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
+        for d in droplets {
+            let start = State {
+                x: (d.x - ox).clamp(0.0, (self.width - 1) as f32),
+                y: (d.y - oy).clamp(0.0, (self.height - 1) as f32),
+                dir_x: d.dir_x,
+                dir_y: d.dir_y,
+                speed: d.speed,
+                water: d.water,
+                sediment: d.sediment,
+            };
+            self.droplet(start, d.steps_left, params, sea, &brush, false);
         }
     }
 
@@ -126,6 +199,19 @@ impl Tile {
     fn erode(&mut self, x: f32, y: f32, amount: f32, floor: f32, brush: &Brush) -> f32 {
         let (cx, cy) = ((x + 0.5) as isize, (y + 0.5) as isize);
         let (w, h) = (self.width as isize, self.height as isize);
+        let r = brush.reach;
+        if cx >= r && cy >= r && cx + r < w && cy + r < h {
+            // The whole brush is inside the tile (nearly always): its shares are known.
+            let centre = cy * w + cx;
+            let mut taken = 0.0;
+            for &(offset, share) in &brush.inside {
+                let cell = &mut self.heights[(centre + offset) as usize];
+                let take = (amount * share).min((*cell - floor).max(0.0));
+                *cell -= take;
+                taken += take;
+            }
+            return taken;
+        }
         let inside =
             |&&(dx, dy, _): &&(isize, isize, f32)| (0..w).contains(&(cx + dx)) && (0..h).contains(&(cy + dy));
         let total: f32 = brush.cells.iter().filter(inside).map(|c| c.2).sum();
@@ -140,14 +226,25 @@ impl Tile {
         taken
     }
 
-    /// One droplet from `start`.
-    fn droplet(&mut self, start: (f32, f32), p: &DropletParams, brush: &Brush) {
-        let (mut x, mut y) = start;
-        let (mut dir_x, mut dir_y) = (0.0f32, 0.0f32);
-        let (mut speed, mut water, mut sediment) = (1.0f32, 1.0f32, 0.0f32);
+    /// One droplet from `start` for at most `steps` steps, ending below `sea`. At an edge of
+    /// the tile inside the grid it is returned to be handed on when `may_leave`, else it stops
+    /// there.
+    fn droplet(
+        &mut self,
+        start: State,
+        steps: u32,
+        p: &DropletParams,
+        sea: f32,
+        brush: &Brush,
+        may_leave: bool,
+    ) -> Option<Carried> {
+        let State { mut x, mut y, mut dir_x, mut dir_y, mut speed, mut water, mut sediment } = start;
         let (limit_x, limit_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
-        for _ in 0..p.max_steps {
+        for step in 0..steps {
             let (height, gx, gy) = self.sample(x, y);
+            if height < sea {
+                break;
+            }
             dir_x = dir_x * p.inertia - gx * (1.0 - p.inertia);
             dir_y = dir_y * p.inertia - gy * (1.0 - p.inertia);
             let length = (dir_x * dir_x + dir_y * dir_y).sqrt();
@@ -158,6 +255,22 @@ impl Tile {
             dir_y /= length;
             let (next_x, next_y) = (x + dir_x, y + dir_y);
             if !(0.0..=limit_x).contains(&next_x) || !(0.0..=limit_y).contains(&next_y) {
+                let (gx, gy) = (next_x + self.origin.0 as f32, next_y + self.origin.1 as f32);
+                let in_grid = (0.0..=(self.grid.0 - 1) as f32).contains(&gx)
+                    && (0.0..=(self.grid.1 - 1) as f32).contains(&gy);
+                if may_leave && in_grid {
+                    let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
+                    return Some(Carried {
+                        x: x + ox,
+                        y: y + oy,
+                        dir_x,
+                        dir_y,
+                        speed,
+                        water,
+                        sediment,
+                        steps_left: steps - step,
+                    });
+                }
                 break;
             }
             let drop = height - self.sample(next_x, next_y).0;
@@ -183,16 +296,24 @@ impl Tile {
         if sediment > 0.0 {
             self.deposit(x, y, sediment);
         }
+        None
     }
 }
 
 /// The cells around a droplet it erodes, weighted by closeness.
 struct Brush {
+    /// Column and row offsets, and weight.
     cells: Vec<(isize, isize, f32)>,
+    /// The radius in whole cells.
+    reach: isize,
+    /// Offsets in a tile's samples and shares of the whole (summing to 1), for a brush wholly
+    /// inside the tile.
+    inside: Vec<(isize, f32)>,
 }
 
 impl Brush {
-    fn new(radius: u32) -> Self {
+    /// The brush of `radius` cells for a tile `width` samples wide.
+    fn new(radius: u32, width: usize) -> Self {
         let r = radius as isize;
         let mut cells = Vec::new();
         for dy in -r..=r {
@@ -203,7 +324,10 @@ impl Brush {
                 }
             }
         }
-        Self { cells }
+        let total: f32 = cells.iter().map(|c| c.2).sum();
+        let inside =
+            cells.iter().map(|&(dx, dy, weight)| (dy * width as isize + dx, weight / total)).collect();
+        Self { cells, reach: r, inside }
     }
 }
 
@@ -226,7 +350,7 @@ mod tests {
         let side = 96;
         let before = cone(side);
         let mut tile = Tile::new(side, side, before.clone());
-        tile.run(20_000, &DropletParams::default(), &mut SplitMix64::new(3));
+        tile.run(20_000, &DropletParams::default(), f32::NEG_INFINITY, &mut SplitMix64::new(3));
         let after = tile.into_heights();
         let sum = |v: &[f32]| v.iter().map(|&h| f64::from(h)).sum::<f64>();
         let moved: f64 = before.iter().zip(&after).map(|(a, b)| f64::from((a - b).abs())).sum();
@@ -236,9 +360,53 @@ mod tests {
     }
 
     #[test]
+    fn droplets_leaving_a_tile_inside_the_grid_are_handed_on_with_their_sediment() {
+        // A grid of 64 x 16 falling toward +x; a tile of its first 32 columns.
+        let (columns, rows) = (64u32, 16u32);
+        let grid: Vec<f32> = (0..columns * rows).map(|i| 100.0 - (i % columns) as f32 * 0.8).collect();
+        let mut tile = Tile::copy_from(&grid, (columns, rows), 0, 0, 32, rows);
+        let before: f64 = tile.heights.iter().map(|&h| f64::from(h)).sum();
+        let carried = tile.run(200, &DropletParams::default(), f32::NEG_INFINITY, &mut SplitMix64::new(7));
+        assert!(carried.len() > 150, "{} handed on", carried.len());
+        assert!(carried.iter().all(|d| d.x >= 30.0 && d.x <= 31.0 && d.steps_left > 0), "{carried:?}");
+        // What the tile lost, the handed-on droplets carry.
+        let after: f64 = tile.heights.iter().map(|&h| f64::from(h)).sum();
+        let carried_soil: f64 = carried.iter().map(|d| f64::from(d.sediment)).sum();
+        assert!(carried_soil > 0.0);
+        assert!(
+            (before - after - carried_soil).abs() < 1e-3 * carried_soil,
+            "{before} {after} {carried_soil}"
+        );
+        // The tile of the grid's last 32 columns takes them on, and they stop at the grid's edge.
+        let mut next = Tile::copy_from(&grid, (columns, rows), 30, 0, 34, rows);
+        let start: f64 = next.heights.iter().map(|&h| f64::from(h)).sum();
+        next.resume(&carried, &DropletParams::default(), f32::NEG_INFINITY);
+        let end: f64 = next.heights.iter().map(|&h| f64::from(h)).sum();
+        assert!((end - start - carried_soil).abs() < 1e-3 * carried_soil, "{start} {end} {carried_soil}");
+        // A tile that is the whole grid hands nothing on.
+        let mut whole = Tile::new(columns as usize, rows as usize, grid);
+        assert!(
+            whole.run(200, &DropletParams::default(), f32::NEG_INFINITY, &mut SplitMix64::new(7)).is_empty()
+        );
+    }
+
+    #[test]
+    fn droplets_end_at_the_sea() {
+        // A slope wholly under the sea: droplets end where they start, carrying nothing.
+        let heights: Vec<f32> = (0..32 * 32).map(|i| 10.0 - (i % 32) as f32 * 0.5).collect();
+        let mut tile = Tile::new(32, 32, heights.clone());
+        tile.run(500, &DropletParams::default(), 20.0, &mut SplitMix64::new(2));
+        assert_eq!(tile.into_heights(), heights);
+        // Above it, they erode.
+        let mut tile = Tile::new(32, 32, heights.clone());
+        tile.run(500, &DropletParams::default(), -100.0, &mut SplitMix64::new(2));
+        assert_ne!(tile.into_heights(), heights);
+    }
+
+    #[test]
     fn a_flat_tile_stays_flat() {
         let mut tile = Tile::new(16, 16, vec![5.0; 256]);
-        tile.run(1000, &DropletParams::default(), &mut SplitMix64::new(1));
+        tile.run(1000, &DropletParams::default(), f32::NEG_INFINITY, &mut SplitMix64::new(1));
         assert!(tile.into_heights().iter().all(|&h| h == 5.0));
     }
 }

@@ -22,7 +22,8 @@ use rayon::prelude::*;
 use super::{Heightfield, Heightmap};
 use crate::config::SceneConfig;
 pub use run::{
-    BATCHES, Eroded, ErosionError, ErosionMaps, ErosionParams, HeightGrid, MAX_STRENGTH, TILE_SIDE, erode,
+    BATCHES, Eroded, ErosionError, ErosionMaps, ErosionParams, HeightGrid, ISLAND_STRENGTH, MAX_STRENGTH,
+    TILE_SIDE, erode,
 };
 
 /// Erodes a heightmap placed with `config` (its world heights and cell size), and returns the new

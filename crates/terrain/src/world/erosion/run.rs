@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::droplet::{DropletParams, Tile};
+use super::droplet::{Carried, DropletParams, Tile};
 use super::random::SplitMix64;
 use super::{flow, thermal};
 
@@ -17,6 +17,10 @@ pub const BATCHES: u32 = 8;
 
 /// Largest accepted STRENGTH (droplets and thermal passes scale with it).
 pub const MAX_STRENGTH: f32 = 10.0;
+
+/// The STRENGTH the procedural island is eroded with unless told otherwise: enough droplets for
+/// their paths to gather into valleys and channels.
+pub const ISLAND_STRENGTH: f32 = 4.0;
 
 /// A grid of heights with its horizontal spacing.
 #[derive(Debug, Clone, PartialEq)]
@@ -74,14 +78,17 @@ pub struct ErosionParams {
     pub thermal_passes: u32,
     /// The steepest stable slope, in degrees from the horizontal (0 to 89).
     pub talus_degrees: f32,
+    /// Height of the sea (in the units of the heights), where droplets end and leave their
+    /// sediment, as rivers do; `None` for no sea (droplets run on over ground below any level).
+    pub sea_level: Option<f32>,
     /// Fraction of a slope's excess over the talus slope moved per thermal pass (0 to 0.5).
     pub thermal_rate: f32,
 }
 
 impl ErosionParams {
     /// The parameters of `--erode STRENGTH`: `strength` (greater than 0, at most
-    /// [`MAX_STRENGTH`]) droplets per sample and `4 * strength` thermal passes (rounded up), the
-    /// other parameters at their defaults.
+    /// [`MAX_STRENGTH`]) droplets per sample and `strength / 4` thermal passes (rounded up), the
+    /// other parameters at their defaults (no sea).
     pub fn with_strength(strength: f32, seed: u64) -> Result<Self, ErosionError> {
         // Written so that NaN is refused too.
         let valid = strength > 0.0 && strength <= MAX_STRENGTH;
@@ -95,7 +102,7 @@ impl ErosionParams {
         Ok(Self {
             seed,
             droplets_per_cell: strength,
-            thermal_passes: (4.0 * strength).ceil() as u32,
+            thermal_passes: (strength / 4.0).ceil() as u32,
             ..Self::default()
         })
     }
@@ -118,6 +125,9 @@ impl ErosionParams {
         )?;
         check("talus_degrees", self.talus_degrees, (0.0..89.0).contains(&self.talus_degrees), "0 to 89")?;
         check("thermal_rate", self.thermal_rate, (0.0..=0.5).contains(&self.thermal_rate), "0 to 0.5")?;
+        if let Some(sea) = self.sea_level {
+            check("sea_level", sea, true, "a finite height")?;
+        }
         check("inertia", d.inertia, (0.0..1.0).contains(&d.inertia), "0 to less than 1")?;
         check("capacity", d.capacity, d.capacity >= 0.0, "0 or more")?;
         check("min_capacity", d.min_capacity, d.min_capacity >= 0.0, "0 or more")?;
@@ -134,15 +144,16 @@ impl ErosionParams {
 }
 
 impl Default for ErosionParams {
-    /// One droplet a sample and four thermal passes at a talus angle of 40 degrees.
+    /// One droplet a sample and one thermal pass at a talus angle of 40 degrees, no sea.
     fn default() -> Self {
         Self {
             seed: 1,
             droplets_per_cell: 1.0,
             droplet: DropletParams::default(),
-            thermal_passes: 4,
+            thermal_passes: 1,
             talus_degrees: 40.0,
             thermal_rate: 0.5,
+            sea_level: None,
         }
     }
 }
@@ -205,12 +216,13 @@ pub fn erode(
     // slope is the height difference between neighbours.
     let scale = grid.cell_size;
     let mut heights: Vec<f32> = grid.heights.par_iter().map(|&h| h / scale).collect();
+    let sea = params.sea_level.map_or(f32::NEG_INFINITY, |level| level / scale);
     // Progress counts batches and passes; the maps at the end are one more.
     let total_steps = (BATCHES + params.thermal_passes + 1) as f32;
     let mut step = 0.0;
     progress(0.0);
     for batch in 0..BATCHES {
-        droplet_batch(&mut heights, columns, rows, params, batch);
+        droplet_batch(&mut heights, columns, rows, params, sea, batch);
         step += 1.0;
         progress(step / total_steps);
     }
@@ -234,12 +246,9 @@ pub fn erode(
     })
 }
 
-/// One batch of droplets over a tiling shifted by an offset drawn from the seed and the batch.
-/// Each tile is copied out, eroded by its own droplets with its own random stream, and written
-/// back in the tiles' order: nothing depends on which thread ran which tile.
-fn droplet_batch(heights: &mut [f32], columns: u32, rows: u32, params: &ErosionParams, batch: u32) {
-    let mut offsets = SplitMix64::new(params.seed ^ 0x6572_6f73_696f_6e00 ^ u64::from(batch));
-    let (dx, dy) = (offsets.below(TILE_SIDE), offsets.below(TILE_SIDE));
+/// The tiles of a tiling whose cuts fall `offset` (plus multiples of [`TILE_SIDE`]) from the
+/// grid's first column and row: (column, row, width, height) row by row.
+fn tiling(columns: u32, rows: u32, (dx, dy): (u32, u32)) -> Vec<(u32, u32, u32, u32)> {
     let starts = |offset: u32, length: u32| -> Vec<(u32, u32)> {
         let mut cuts = vec![0];
         let mut cut = offset;
@@ -253,27 +262,68 @@ fn droplet_batch(heights: &mut [f32], columns: u32, rows: u32, params: &ErosionP
         cuts.windows(2).filter(|w| w[1] > w[0]).map(|w| (w[0], w[1] - w[0])).collect()
     };
     let (xs, ys) = (starts(dx, columns), starts(dy, rows));
-    let tiles: Vec<(u32, u32, u32, u32)> =
-        ys.iter().flat_map(|&(y, h)| xs.iter().map(move |&(x, w)| (x, y, w, h))).collect();
-    let source: &[f32] = heights;
-    let per_batch = params.droplets_per_cell / BATCHES as f32;
-    let done: Vec<Vec<f32>> = tiles
-        .par_iter()
-        .enumerate()
-        .map(|(index, &(x, y, w, h))| {
-            let mut tile = Tile::copy_from(source, columns, x, y, w, h);
-            let droplets = (per_batch * (w * h) as f32).round() as u64;
-            let stream =
-                params.seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (u64::from(batch) << 40) ^ index as u64;
-            let mut random = SplitMix64::new(stream);
-            tile.run(droplets, &params.droplet, &mut random);
-            tile.into_heights()
-        })
-        .collect();
-    for (&(x, y, w, _), tile) in tiles.iter().zip(&done) {
+    ys.iter().flat_map(|&(y, h)| xs.iter().map(move |&(x, w)| (x, y, w, h))).collect()
+}
+
+/// Writes tiles (in `tiles`' order) back into `heights`.
+fn write_back(heights: &mut [f32], columns: u32, tiles: &[(u32, u32, u32, u32)], done: &[Vec<f32>]) {
+    for (&(x, y, w, _), tile) in tiles.iter().zip(done) {
         for (r, row) in tile.chunks_exact(w as usize).enumerate() {
             let start = (y as usize + r) * columns as usize + x as usize;
             heights[start..start + w as usize].copy_from_slice(row);
         }
     }
+}
+
+/// One batch of droplets over a tiling shifted by an offset drawn from the seed and the batch.
+/// Each tile is copied out, eroded by its own droplets with its own random stream, and written
+/// back in the tiles' order: nothing depends on which thread ran which tile. Droplets that reach
+/// a tile's edge go on in a second tiling shifted by half a tile (where they are far from any
+/// edge), in the order of their tiles and of their leaving, so that tile edges leave no seams.
+fn droplet_batch(heights: &mut [f32], columns: u32, rows: u32, params: &ErosionParams, sea: f32, batch: u32) {
+    let mut offsets = SplitMix64::new(params.seed ^ 0x6572_6f73_696f_6e00 ^ u64::from(batch));
+    let (dx, dy) = (offsets.below(TILE_SIDE), offsets.below(TILE_SIDE));
+    let tiles = tiling(columns, rows, (dx, dy));
+    let source: &[f32] = heights;
+    let per_batch = params.droplets_per_cell / BATCHES as f32;
+    let done: Vec<(Vec<f32>, Vec<Carried>)> = tiles
+        .par_iter()
+        .enumerate()
+        .map(|(index, &(x, y, w, h))| {
+            let mut tile = Tile::copy_from(source, (columns, rows), x, y, w, h);
+            let droplets = (per_batch * (w * h) as f32).round() as u64;
+            let stream =
+                params.seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ (u64::from(batch) << 40) ^ index as u64;
+            let mut random = SplitMix64::new(stream);
+            let carried = tile.run(droplets, &params.droplet, sea, &mut random);
+            (tile.into_heights(), carried)
+        })
+        .collect();
+    let (done, carried): (Vec<Vec<f32>>, Vec<Vec<Carried>>) = done.into_iter().unzip();
+    write_back(heights, columns, &tiles, &done);
+    // The droplets handed on, each to the tile of the half-shifted tiling it is in.
+    let half = TILE_SIDE / 2;
+    let shifted = tiling(columns, rows, ((dx + half) % TILE_SIDE, (dy + half) % TILE_SIDE));
+    let mut waiting: Vec<Vec<Carried>> = vec![Vec::new(); shifted.len()];
+    for droplet in carried.into_iter().flatten() {
+        let (cx, cy) = (droplet.x.max(0.0) as u32, droplet.y.max(0.0) as u32);
+        let found =
+            shifted.iter().position(|&(x, y, w, h)| (x..x + w).contains(&cx) && (y..y + h).contains(&cy));
+        if let Some(index) = found {
+            waiting[index].push(droplet);
+        }
+    }
+    let busy: Vec<usize> = (0..shifted.len()).filter(|&i| !waiting[i].is_empty()).collect();
+    let busy_tiles: Vec<(u32, u32, u32, u32)> = busy.iter().map(|&i| shifted[i]).collect();
+    let source: &[f32] = heights;
+    let done: Vec<Vec<f32>> = busy
+        .par_iter()
+        .map(|&index| {
+            let (x, y, w, h) = shifted[index];
+            let mut tile = Tile::copy_from(source, (columns, rows), x, y, w, h);
+            tile.resume(&waiting[index], &params.droplet, sea);
+            tile.into_heights()
+        })
+        .collect();
+    write_back(heights, columns, &busy_tiles, &done);
 }
