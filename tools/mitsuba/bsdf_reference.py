@@ -42,6 +42,20 @@ CASES = {
     "blend": {"type": "blendbsdf", "weight": 0.3,
               "bsdf_0": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.5, 0.2]}},
               "bsdf_1": {"type": "roughdielectric", "distribution": "ggx", "alpha": 0.3}},
+    "principled_default": {"type": "principled"},
+    "principled_full": {"type": "principled", "base_color": {"type": "rgb", "value": [0.8, 0.3, 0.1]},
+                        "metallic": 0.3, "specular": 0.6, "roughness": 0.3, "spec_tint": 0.4,
+                        "anisotropic": 0.5, "sheen": 0.3, "sheen_tint": 0.2, "clearcoat": 0.6,
+                        "clearcoat_gloss": 0.3, "flatness": 0.4},
+    "principled_glass": {"type": "principled", "base_color": {"type": "rgb", "value": [0.9, 0.8, 0.7]},
+                         "spec_trans": 0.8, "eta": 1.4, "roughness": 0.4, "metallic": 0.1, "sheen": 0.5},
+    "principled_metal": {"type": "principled", "base_color": {"type": "rgb", "value": [0.9, 0.6, 0.2]},
+                         "metallic": 1.0, "roughness": 0.2, "anisotropic": 0.3},
+    "principledthin_default": {"type": "principledthin"},
+    "principledthin_full": {"type": "principledthin", "base_color": {"type": "rgb", "value": [0.7, 0.1, 0.1]},
+                            "roughness": 0.3, "spec_tint": 0.1, "anisotropic": 0.5, "spec_trans": 0.6,
+                            "diff_trans": 0.6, "eta": 1.33, "sheen": 0.5, "sheen_tint": 0.5, "flatness": 0.3},
+    "principledthin_clear": {"type": "principledthin", "spec_trans": 0.9, "eta": 1.5, "roughness": 0.4},
 }
 
 # Delta BSDFs: `sample` at fixed numbers, (name, wo, sample1) -> (wi, weight, pdf, eta).

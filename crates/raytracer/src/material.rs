@@ -117,6 +117,13 @@ pub enum Material {
         /// The coating's microfacets (isotropic).
         microfacet: Microfacet,
     },
+    /// `principled`: Mitsuba's Disney-style BSDF (Burley 2012, 2015): diffuse with retro-reflection
+    /// and fake subsurface, sheen, a GGX specular lobe that is a tinted dielectric or metal, a
+    /// GGX transmission lobe, and a GTR1 clearcoat (Mitsuba's `principled.cpp`).
+    Principled(Principled),
+    /// `principledthin`: the thin-surface variant (Mitsuba's `principledthin.cpp`): the same
+    /// front lobes on both sides, with specular and diffuse transmission through the sheet.
+    PrincipledThin(PrincipledThin),
     /// `twosided`: `front` on the side the normal points to, `back` (the same material unless a
     /// second one is given) on the other, each seen as from its front.
     TwoSided {
@@ -221,6 +228,8 @@ impl Material {
                 coating.visit_params(f);
                 microfacet.visit_params(f);
             }
+            Material::Principled(p) => p.visit_params(f),
+            Material::PrincipledThin(p) => p.visit_params(f),
             Material::TwoSided { front, back } => {
                 front.visit_params(f);
                 back.visit_params(f);
@@ -256,6 +265,120 @@ impl Material {
             }
             Material::Mask { material, .. } | Material::Perturbed { material, .. } => any(material),
             _ => false,
+        }
+    }
+}
+
+/// The parameters of `principled` (Mitsuba's names and defaults). Every parameter but `eta` and
+/// the sampling rates may be a texture; scalar ones read the first channel. All but `eta` and
+/// the rates are meant to lie in [0, 1].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Principled {
+    /// `base_color` (default 0.5), linear RGB.
+    pub base_color: Param,
+    /// `roughness` (default 0.5): the GGX `alpha` is its square (at least 0.001).
+    pub roughness: Param,
+    /// `anisotropic` (default 0): `alpha_u = r^2 / sqrt(1 - 0.9 a)`, `alpha_v = r^2 sqrt(1 - 0.9 a)`.
+    pub anisotropic: Param,
+    /// `metallic` (default 0): the weight of the metal (Schlick reflection tinted by the base
+    /// colour).
+    pub metallic: Param,
+    /// `spec_trans` (default 0): the share of the dielectric that transmits (rough glass).
+    pub spec_trans: Param,
+    /// `spec_tint` (default 0): how much the dielectric reflection takes the base colour.
+    pub spec_tint: Param,
+    /// `sheen` (default 0): the grazing sheen lobe's weight.
+    pub sheen: Param,
+    /// `sheen_tint` (default 0): how much the sheen takes the base colour.
+    pub sheen_tint: Param,
+    /// `flatness` (default 0): diffuse (0) to Hanrahan-Krueger fake subsurface (1).
+    pub flatness: Param,
+    /// `clearcoat` (default 0): the weight of the GTR1 coat lobe.
+    pub clearcoat: Param,
+    /// `clearcoat_gloss` (default 0): the coat's `alpha` goes from 0.1 (0) to 0.001 (1).
+    pub clearcoat_gloss: Param,
+    /// The relative index of refraction inside over outside: `eta`, or from `specular`
+    /// (default 0.5) as `2 / (1 - sqrt(0.08 specular)) - 1`, with Mitsuba's adjustments
+    /// (1.001 for `eta = 1`, `specular = 1e-3` for 0, when `spec_trans` is given).
+    pub eta: f64,
+    /// `main_specular_sampling_rate` (default 1).
+    pub specular_sampling_rate: f64,
+    /// `clearcoat_sampling_rate` (default 1).
+    pub clearcoat_sampling_rate: f64,
+    /// `diffuse_reflectance_sampling_rate` (default 1).
+    pub diffuse_sampling_rate: f64,
+}
+
+impl Principled {
+    fn visit_params<'a>(&'a self, f: &mut dyn FnMut(&'a Param)) {
+        for p in [
+            &self.base_color,
+            &self.roughness,
+            &self.anisotropic,
+            &self.metallic,
+            &self.spec_trans,
+            &self.spec_tint,
+            &self.sheen,
+            &self.sheen_tint,
+            &self.flatness,
+            &self.clearcoat,
+            &self.clearcoat_gloss,
+        ] {
+            f(p);
+        }
+    }
+}
+
+/// The parameters of `principledthin` (Mitsuba's names and defaults); every parameter but the
+/// sampling rates may be a texture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrincipledThin {
+    /// `base_color` (default 0.5), linear RGB.
+    pub base_color: Param,
+    /// `roughness` (default 0.5).
+    pub roughness: Param,
+    /// `anisotropic` (default 0).
+    pub anisotropic: Param,
+    /// `spec_trans` (default 0): the share of the specular (reflecting and transmitting) lobes.
+    pub spec_trans: Param,
+    /// `eta` (default 1.5): the sheet's relative index (Fresnel, and the transmission's
+    /// roughness `(0.65 eta - 0.35) roughness`).
+    pub eta: Param,
+    /// `spec_tint` (default 0).
+    pub spec_tint: Param,
+    /// `sheen` (default 0).
+    pub sheen: Param,
+    /// `sheen_tint` (default 0).
+    pub sheen_tint: Param,
+    /// `flatness` (default 0).
+    pub flatness: Param,
+    /// `diff_trans` (default 0, range [0, 2]): diffuse transmission, halved into [0, 1].
+    pub diff_trans: Param,
+    /// `specular_reflectance_sampling_rate` (default 1).
+    pub specular_reflectance_sampling_rate: f64,
+    /// `specular_transmittance_sampling_rate` (default 1).
+    pub specular_transmittance_sampling_rate: f64,
+    /// `diffuse_reflectance_sampling_rate` (default 1).
+    pub diffuse_reflectance_sampling_rate: f64,
+    /// `diffuse_transmittance_sampling_rate` (default 1).
+    pub diffuse_transmittance_sampling_rate: f64,
+}
+
+impl PrincipledThin {
+    fn visit_params<'a>(&'a self, f: &mut dyn FnMut(&'a Param)) {
+        for p in [
+            &self.base_color,
+            &self.roughness,
+            &self.anisotropic,
+            &self.spec_trans,
+            &self.eta,
+            &self.spec_tint,
+            &self.sheen,
+            &self.sheen_tint,
+            &self.flatness,
+            &self.diff_trans,
+        ] {
+            f(p);
         }
     }
 }

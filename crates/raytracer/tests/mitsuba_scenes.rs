@@ -17,6 +17,9 @@
 //! `target/test-output/mitsuba/`. Mitsuba's renders are cached under `target/mitsuba-reference/`,
 //! keyed by a hash of the scene's files, the size, the samples and the tool.
 //!
+//! The documentation's principled scenes, which Mitsuba refuses as written, are compared as
+//! scenes derived from them under `target/` (`PRINCIPLED_SCENES`).
+//!
 //! In CI a subset covering every supported plugin is compared; set `RAYTERRA_MITSUBA_ALL=1` to
 //! compare every scene whose plugins rayterra has (`docs/mitsuba-format.md` names the command),
 //! and `RAYTERRA_MITSUBA_SCENES=cbox,matpreview` to compare only the scenes named.
@@ -83,6 +86,86 @@ const CI_SCENES: [&str; 23] = [
     "docs/scenes/shape_ply_bunny.xml",
     "docs/scenes/sensor_orthographic.xml",
 ];
+
+/// Scenes derived from the documentation's principled scenes
+/// (`docs/scenes/principled_blend_creation/`), which Mitsuba 3.9.1 refuses as written (their
+/// shapes are spelled `Sphere` and `Rectangle`, its plugin names are lower case): `(name, file,
+/// the material's parameters)`. Each is written under `target/test-output/derived/` with the
+/// shape names lower-cased, the folder on the search path (for `envmap.hdr`) and the material's
+/// `base_color` line replaced by the parameters given (kept when they are empty).
+const PRINCIPLED_SCENES: [(&str, &str, &str); 7] = [
+    ("principled_defaults", "scene.xml", ""),
+    (
+        "principled_full",
+        "scene.xml",
+        r#"<rgb name="base_color" value="0.8, 0.3, 0.1"/> <float name="metallic" value="0.3"/>
+           <float name="specular" value="0.6"/> <float name="roughness" value="0.3"/>
+           <float name="spec_tint" value="0.4"/> <float name="anisotropic" value="0.5"/>
+           <float name="sheen" value="0.3"/> <float name="sheen_tint" value="0.2"/>
+           <float name="clearcoat" value="0.6"/> <float name="clearcoat_gloss" value="0.3"/>
+           <float name="flatness" value="0.4"/>"#,
+    ),
+    (
+        "principled_glass",
+        "scene.xml",
+        r#"<rgb name="base_color" value="0.9, 0.9, 0.8"/> <float name="spec_trans" value="0.9"/>
+           <float name="roughness" value="0.2"/> <float name="eta" value="1.45"/>"#,
+    ),
+    (
+        "principled_textured",
+        "scene.xml",
+        r#"<rgb name="base_color" value="0.2, 0.4, 0.8"/>
+           <texture name="metallic" type="checkerboard"><float name="color0" value="0"/>
+               <float name="color1" value="1"/><transform name="to_uv"><scale x="4" y="4"/></transform>
+           </texture>
+           <texture name="roughness" type="checkerboard"><float name="color0" value="0.15"/>
+               <float name="color1" value="0.6"/><transform name="to_uv"><scale x="2" y="8"/></transform>
+           </texture>"#,
+    ),
+    ("principledthin_defaults", "scene_thin.xml", ""),
+    (
+        "principledthin_full",
+        "scene_thin.xml",
+        r#"<rgb name="base_color" value="0.7, 0.1, 0.1"/> <float name="roughness" value="0.15"/>
+           <float name="spec_tint" value="0.1"/> <float name="anisotropic" value="0.5"/>
+           <float name="spec_trans" value="0.8"/> <float name="diff_trans" value="0.3"/>
+           <float name="eta" value="1.33"/> <float name="sheen" value="0.3"/>
+           <float name="flatness" value="0.5"/>"#,
+    ),
+    ("principledthin_light", "scene_thin_light.xml", ""),
+];
+
+/// The [`PRINCIPLED_SCENES`] compared in CI.
+const CI_PRINCIPLED: [&str; 2] = ["principled_full", "principledthin_full"];
+
+/// Writes the [`PRINCIPLED_SCENES`] entry `name` (see there) and returns its path.
+fn principled_scene(data: &Path, name: &str) -> PathBuf {
+    let (_, file, params) =
+        PRINCIPLED_SCENES.iter().find(|(n, _, _)| *n == name).expect("a principled scene of that name");
+    let folder = data.join("docs/scenes/principled_blend_creation");
+    let source = std::fs::read_to_string(folder.join(file)).expect("read the principled scene");
+    let mut text = String::new();
+    for line in source.lines() {
+        if line.contains("name=\"base_color\"") && !params.is_empty() {
+            text.push_str(params);
+        } else if line.trim_start().starts_with("<scene ") {
+            text.push_str(line);
+            text.push_str(&format!("\n    <path value=\"{}\"/>", folder.display()));
+        } else {
+            text.push_str(
+                &line
+                    .replace("type=\"Sphere\"", "type=\"sphere\"")
+                    .replace("type=\"Rectangle\"", "type=\"rectangle\""),
+            );
+        }
+        text.push('\n');
+    }
+    let dir = output_dir().join("derived");
+    std::fs::create_dir_all(&dir).expect("derived scene folder");
+    let path = dir.join(format!("{name}.xml"));
+    std::fs::write(&path, text).expect("write the derived scene");
+    path
+}
 
 /// Scenes where rayterra and Mitsuba 3.9.1 knowingly differ, with why; they are reported, not
 /// compared.
@@ -320,8 +403,10 @@ fn mitsuba_scenes_render_as_mitsuba_renders_them() {
     let Some(python) = mitsuba_python() else { return };
     let all = std::env::var_os("RAYTERRA_MITSUBA_ALL").is_some();
     let mut scenes: Vec<PathBuf> = CI_SCENES.iter().map(|s| data.join(s)).collect();
+    scenes.extend(CI_PRINCIPLED.iter().map(|n| principled_scene(&data, n)));
     if all {
         scenes.clear();
+        scenes.extend(PRINCIPLED_SCENES.iter().map(|(n, _, _)| principled_scene(&data, n)));
         for dir in ["scenes/cbox", "scenes/matpreview", "docs/scenes"] {
             let mut found: Vec<PathBuf> = std::fs::read_dir(data.join(dir))
                 .expect("list")

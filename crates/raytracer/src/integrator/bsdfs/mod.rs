@@ -12,7 +12,9 @@
 //!   `eta` is scaled by `1 / eta^2`.
 //!
 //! One-sided plugins (`diffuse`, `conductor`, `roughconductor`, `plastic`, `roughplastic`) are
-//! black when `wo.z <= 0` or `wi.z <= 0`; the dielectrics work from both sides. The wrappers
+//! black when `wo.z <= 0` or `wi.z <= 0`; the dielectrics work from both sides, and so do
+//! `principled` (seen from the back: its specular reflection and transmission only) and
+//! `principledthin` (the same from both sides). The wrappers
 //! (`twosided`, `mask`, `blendbsdf`) are flattened into at most [`MAX_COMPONENTS`] weighted
 //! components (see [`wrappers`]).
 //!
@@ -49,6 +51,8 @@ pub mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
 pub mod plastic;
+pub mod principled;
+pub mod principledthin;
 pub mod roughdielectric;
 pub mod roughplastic;
 pub mod special;
@@ -108,6 +112,10 @@ pub enum Lobe {
     Plastic(Plastic),
     /// `roughplastic`.
     RoughPlastic(RoughPlastic),
+    /// `principled`.
+    Principled(principled::Principled),
+    /// `principledthin`.
+    PrincipledThin(principledthin::PrincipledThin),
     /// The pass-through of `mask`: `wi = -wo`, weight 1.
     Null,
 }
@@ -121,6 +129,8 @@ impl Lobe {
             Lobe::RoughConductor(l) => l.eval(wo, wi),
             Lobe::Plastic(l) => l.eval(wo, wi),
             Lobe::RoughPlastic(l) => l.eval(wo, wi),
+            Lobe::Principled(l) => l.eval(wo, wi),
+            Lobe::PrincipledThin(l) => l.eval(wo, wi),
             Lobe::Dielectric(_) | Lobe::ThinDielectric(_) | Lobe::Conductor(_) | Lobe::Null => DVec3::ZERO,
         }
     }
@@ -133,6 +143,8 @@ impl Lobe {
             Lobe::RoughConductor(l) => l.pdf(wo, wi),
             Lobe::Plastic(l) => l.pdf(wo, wi),
             Lobe::RoughPlastic(l) => l.pdf(wo, wi),
+            Lobe::Principled(l) => l.pdf(wo, wi),
+            Lobe::PrincipledThin(l) => l.pdf(wo, wi),
             Lobe::Dielectric(_) | Lobe::ThinDielectric(_) | Lobe::Conductor(_) | Lobe::Null => 0.0,
         }
     }
@@ -148,6 +160,8 @@ impl Lobe {
             Lobe::RoughConductor(l) => l.sample(wo, u1, u2),
             Lobe::Plastic(l) => l.sample(wo, u, u1, u2),
             Lobe::RoughPlastic(l) => l.sample(wo, u, u1, u2),
+            Lobe::Principled(l) => l.sample(wo, u, u1, u2),
+            Lobe::PrincipledThin(l) => l.sample(wo, u, u1, u2),
             Lobe::Null => Some(LocalSample { wi: -wo, weight: DVec3::ONE, pdf: 1.0, delta: true, eta: 1.0 }),
         }
     }
@@ -161,6 +175,8 @@ impl Lobe {
                 | Lobe::RoughConductor(_)
                 | Lobe::Plastic(_)
                 | Lobe::RoughPlastic(_)
+                | Lobe::Principled(_)
+                | Lobe::PrincipledThin(_)
         )
     }
 
@@ -176,6 +192,8 @@ impl Lobe {
             Lobe::RoughConductor(l) => l.metal.albedo(),
             Lobe::Plastic(l) => l.diffuse,
             Lobe::RoughPlastic(l) => l.base,
+            Lobe::Principled(l) => l.base_color,
+            Lobe::PrincipledThin(l) => l.base_color,
             Lobe::Null => DVec3::ONE,
         }
     }
@@ -344,6 +362,47 @@ pub(crate) fn leaf_lobe(material: &Material, param: &mut dyn FnMut(&Param) -> DV
                 param(&c.specular_reflectance),
                 c.nonlinear,
                 d,
+            ))
+        }
+        Material::Principled(p) => {
+            let base = param(&p.base_color);
+            let mut s = |q: &Param| param(q).x;
+            Lobe::Principled(principled::Principled::new(
+                base,
+                s(&p.roughness),
+                s(&p.anisotropic),
+                s(&p.metallic),
+                s(&p.spec_trans),
+                s(&p.spec_tint),
+                s(&p.sheen),
+                s(&p.sheen_tint),
+                s(&p.flatness),
+                s(&p.clearcoat),
+                s(&p.clearcoat_gloss),
+                p.eta,
+                [p.specular_sampling_rate, p.clearcoat_sampling_rate, p.diffuse_sampling_rate],
+            ))
+        }
+        Material::PrincipledThin(p) => {
+            let base = param(&p.base_color);
+            let mut s = |q: &Param| param(q).x;
+            Lobe::PrincipledThin(principledthin::PrincipledThin::new(
+                base,
+                s(&p.roughness),
+                s(&p.anisotropic),
+                s(&p.spec_trans),
+                s(&p.eta),
+                s(&p.spec_tint),
+                s(&p.sheen),
+                s(&p.sheen_tint),
+                s(&p.flatness),
+                s(&p.diff_trans),
+                [
+                    p.specular_reflectance_sampling_rate,
+                    p.specular_transmittance_sampling_rate,
+                    p.diffuse_reflectance_sampling_rate,
+                    p.diffuse_transmittance_sampling_rate,
+                ],
             ))
         }
         Material::Course(_)

@@ -6,6 +6,7 @@ use super::super::{Plugin, PluginKind, Value};
 use super::{Builder, Props, metal_ior, named_ior};
 use crate::material::{
     Coating, Distribution, Interface, MAX_COMPONENTS, Material, Metal, Microfacet, Param, Perturbation,
+    Principled, PrincipledThin,
 };
 use crate::scene::Diagnostic;
 
@@ -62,6 +63,8 @@ impl<'a> Builder<'a> {
                 coating: self.coating(props)?,
                 microfacet: self.microfacet(props, false)?,
             },
+            "principled" => Material::Principled(self.principled(props)?),
+            "principledthin" => Material::PrincipledThin(self.principled_thin(props)?),
             "twosided" => {
                 let inner = self.nested_materials(props, 1, 2)?;
                 let front = Box::new((*inner[0]).clone());
@@ -157,6 +160,73 @@ impl<'a> Builder<'a> {
             int_ior: ior(props, "int_ior", PLASTIC_INT_IOR)?,
             ext_ior: ior(props, "ext_ior", EXT_IOR)?,
             nonlinear: props.boolean("nonlinear", false)?,
+        })
+    }
+
+    fn principled(&mut self, props: &Props<'a>) -> Result<Principled, Diagnostic> {
+        let spec_trans = self.scalar_param(props, "spec_trans", 0.0)?;
+        // Mitsuba's `get_flag`: the lobe exists unless the parameter is absent or a zero float.
+        let has_spec_trans = match &spec_trans {
+            Param::Texture(_) => true,
+            Param::Constant(c) => props.plugin.property("spec_trans").is_some() && *c != glam::DVec3::ZERO,
+        };
+        let eta = match (props.plugin.property("eta"), props.plugin.property("specular")) {
+            (Some(_), Some(_)) => {
+                return Err(props.error("give `eta` or `specular`, not both (they set the same index)"));
+            }
+            (Some(_), None) => {
+                let eta = props.positive("eta", 1.5)?;
+                if has_spec_trans && eta == 1.0 { 1.001 } else { eta }
+            }
+            (None, _) => {
+                let mut specular = props.float("specular", 0.5)?;
+                if has_spec_trans && specular == 0.0 {
+                    specular = 1e-3;
+                }
+                let eta = 2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0;
+                if !(eta > 0.0 && eta.is_finite()) {
+                    return Err(props.error(format!(
+                        "`specular` = {specular} gives no index of refraction (it must lie in [0, 12.5))"
+                    )));
+                }
+                eta
+            }
+        };
+        Ok(Principled {
+            base_color: self.param(props, "base_color", 0.5)?,
+            roughness: self.scalar_param(props, "roughness", 0.5)?,
+            anisotropic: self.scalar_param(props, "anisotropic", 0.0)?,
+            metallic: self.scalar_param(props, "metallic", 0.0)?,
+            spec_trans,
+            spec_tint: self.scalar_param(props, "spec_tint", 0.0)?,
+            sheen: self.scalar_param(props, "sheen", 0.0)?,
+            sheen_tint: self.scalar_param(props, "sheen_tint", 0.0)?,
+            flatness: self.scalar_param(props, "flatness", 0.0)?,
+            clearcoat: self.scalar_param(props, "clearcoat", 0.0)?,
+            clearcoat_gloss: self.scalar_param(props, "clearcoat_gloss", 0.0)?,
+            eta,
+            specular_sampling_rate: props.float("main_specular_sampling_rate", 1.0)?,
+            clearcoat_sampling_rate: props.float("clearcoat_sampling_rate", 1.0)?,
+            diffuse_sampling_rate: props.float("diffuse_reflectance_sampling_rate", 1.0)?,
+        })
+    }
+
+    fn principled_thin(&mut self, props: &Props<'a>) -> Result<PrincipledThin, Diagnostic> {
+        Ok(PrincipledThin {
+            base_color: self.param(props, "base_color", 0.5)?,
+            roughness: self.scalar_param(props, "roughness", 0.5)?,
+            anisotropic: self.scalar_param(props, "anisotropic", 0.0)?,
+            spec_trans: self.scalar_param(props, "spec_trans", 0.0)?,
+            eta: self.scalar_param(props, "eta", 1.5)?,
+            spec_tint: self.scalar_param(props, "spec_tint", 0.0)?,
+            sheen: self.scalar_param(props, "sheen", 0.0)?,
+            sheen_tint: self.scalar_param(props, "sheen_tint", 0.0)?,
+            flatness: self.scalar_param(props, "flatness", 0.0)?,
+            diff_trans: self.scalar_param(props, "diff_trans", 0.0)?,
+            specular_reflectance_sampling_rate: props.float("specular_reflectance_sampling_rate", 1.0)?,
+            specular_transmittance_sampling_rate: props.float("specular_transmittance_sampling_rate", 1.0)?,
+            diffuse_reflectance_sampling_rate: props.float("diffuse_reflectance_sampling_rate", 1.0)?,
+            diffuse_transmittance_sampling_rate: props.float("diffuse_transmittance_sampling_rate", 1.0)?,
         })
     }
 

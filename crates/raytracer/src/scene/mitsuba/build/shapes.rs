@@ -63,6 +63,13 @@ impl<'a> Builder<'a> {
                 )));
             }
             let radiance = e.color("radiance")?.unwrap_or(DVec3::ONE);
+            // A textured radiance would otherwise pass unnoticed (a nested plugin, not a property).
+            for (_, t) in e.children(PluginKind::Texture) {
+                self.warn(
+                    &Props::new(self.doc, t),
+                    "an `area` emitter's radiance is a constant in rayterra: this one emits Mitsuba's default, 1",
+                );
+            }
             self.finish(&e);
             self.push_emitter(Emitter::Area { primitive: index, radiance });
         }

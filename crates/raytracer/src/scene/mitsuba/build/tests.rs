@@ -297,3 +297,81 @@ fn a_checkerboard_read_as_a_scalar_takes_mitsubas_other_phase() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn principled_takes_mitsubas_defaults_and_parameters() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <shape type="sphere"><bsdf type="principled"/></shape>
+        <shape type="sphere"><bsdf type="principled">
+            <rgb name="base_color" value="0.8, 0.3, 0.1"/><float name="metallic" value="0.3"/>
+            <float name="eta" value="1.33"/><float name="clearcoat" value="0.6"/>
+            <texture name="roughness" type="checkerboard"/>
+            <float name="main_specular_sampling_rate" value="0.5"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="principled"><float name="spec_trans" value="0.5"/>
+            <float name="specular" value="0"/></bsdf></shape>
+        <shape type="sphere"><bsdf type="principledthin"><float name="diff_trans" value="1.2"/>
+            <texture name="eta" type="checkerboard"/></bsdf></shape>
+        </scene>"#
+    ));
+    assert!(b.diagnostics.iter().all(|d| d.severity != Severity::Warning), "{:?}", b.diagnostics);
+    let eta_of = |specular: f64| 2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0;
+    match &*b.scene.primitives[0].material {
+        Material::Principled(p) => {
+            assert_eq!(p.base_color, Param::scalar(0.5));
+            assert_eq!(p.roughness, Param::scalar(0.5));
+            assert_eq!(p.metallic, Param::scalar(0.0));
+            assert_eq!(p.clearcoat_gloss, Param::scalar(0.0));
+            assert_eq!(p.eta, eta_of(0.5));
+            assert_eq!(
+                (p.specular_sampling_rate, p.clearcoat_sampling_rate, p.diffuse_sampling_rate),
+                (1.0, 1.0, 1.0)
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    match &*b.scene.primitives[1].material {
+        Material::Principled(p) => {
+            assert_eq!(p.base_color, Param::Constant(DVec3::new(0.8, 0.3, 0.1)));
+            assert_eq!((p.metallic.clone(), p.clearcoat.clone()), (Param::scalar(0.3), Param::scalar(0.6)));
+            assert!(matches!(p.roughness, Param::Texture(_)));
+            assert_eq!((p.eta, p.specular_sampling_rate), (1.33, 0.5));
+        }
+        other => panic!("{other:?}"),
+    }
+    // With transmission, Mitsuba raises a zero `specular` to 1e-3.
+    match &*b.scene.primitives[2].material {
+        Material::Principled(p) => assert_eq!(p.eta, eta_of(1e-3)),
+        other => panic!("{other:?}"),
+    }
+    match &*b.scene.primitives[3].material {
+        Material::PrincipledThin(p) => {
+            assert_eq!(p.diff_trans, Param::scalar(1.2));
+            assert!(matches!(p.eta, Param::Texture(_)));
+            assert_eq!(p.roughness, Param::scalar(0.5));
+            assert_eq!(p.base_color, Param::scalar(0.5));
+        }
+        other => panic!("{other:?}"),
+    }
+    let both = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="sphere"><bsdf type="principled">
+            <float name="eta" value="1.5"/><float name="specular" value="0.5"/></bsdf></shape></scene>"#
+    ));
+    assert!(both[0].contains("`eta` or `specular`"), "{both:?}");
+}
+
+#[test]
+fn a_textured_area_emitter_is_a_warning() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <shape type="rectangle"><emitter type="area"><texture name="radiance" type="checkerboard"/></emitter></shape>
+        </scene>"#
+    ));
+    let warnings: Vec<&str> = b
+        .diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Warning)
+        .map(|d| d.message.as_str())
+        .collect();
+    assert!(warnings.iter().any(|w| w.contains("`checkerboard`") && w.contains("radiance")), "{warnings:?}");
+}
