@@ -58,7 +58,7 @@ const WHOLE_Z_LIMIT: f64 = 4.5;
 
 /// The scenes compared in CI: every supported BSDF, emitter, shape, texture and integrator
 /// appears in at least one.
-const CI_SCENES: [&str; 23] = [
+const CI_SCENES: [&str; 24] = [
     "scenes/cbox/cbox.xml",
     "scenes/matpreview/matpreview.xml",
     "docs/scenes/bsdf_diffuse_textured.xml",
@@ -82,6 +82,7 @@ const CI_SCENES: [&str; 23] = [
     "docs/scenes/shape_sphere_light_analytic.xml",
     "docs/scenes/shape_ply_bunny.xml",
     "docs/scenes/sensor_orthographic.xml",
+    "docs/scenes/texture_mesh_attribute_vertex.xml",
 ];
 
 /// Scenes where rayterra and Mitsuba 3.9.1 knowingly differ, with why; they are reported, not

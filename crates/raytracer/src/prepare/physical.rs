@@ -152,7 +152,7 @@ pub(super) fn load_physical(
                     .map(|b| (Arc::as_ptr(t) as usize, b))
                     .map_err(|e| bitmap_error(location, e)),
             ),
-            TextureSpec::Checkerboard { .. } => None,
+            TextureSpec::Checkerboard { .. } | TextureSpec::MeshAttribute { .. } => None,
         })
         .collect();
     for t in &specs {
@@ -344,12 +344,27 @@ impl PreparedScene {
     }
 
     fn texture_value(&self, spec: &Arc<TextureSpec>, at: &Interaction) -> DVec3 {
+        if let TextureSpec::MeshAttribute { name, scale, .. } = &**spec {
+            return self.mesh_attribute(name, at) * *scale;
+        }
         let (u, v) = self.surface_uv(at);
         self.texture_at(spec, u, v)
     }
 
+    /// The mesh attribute `name` at an interaction: interpolated or per face as
+    /// [`crate::geometry::TriangleMesh::attribute_value`]; black off a mesh that has it.
+    fn mesh_attribute(&self, name: &str, at: &Interaction) -> DVec3 {
+        let shape = &self.scene.primitives[at.primitive as usize].shape;
+        match (shape, at.part) {
+            (Shape::Mesh(m), ShapePart::Triangle { index, b1, b2 }) => {
+                m.attribute(name).map_or(DVec3::ZERO, |a| m.attribute_value(a, index, b1, b2))
+            }
+            _ => DVec3::ZERO,
+        }
+    }
+
     /// A texture's value at texture coordinates `(u, v)` (before its `to_uv`); black for a
-    /// bitmap the scene did not load.
+    /// bitmap the scene did not load and for a mesh attribute (which needs a surface point).
     pub fn texture_at(&self, spec: &Arc<TextureSpec>, u: f64, v: f64) -> DVec3 {
         match &**spec {
             TextureSpec::Bitmap { nearest, wrap, to_uv, .. } => {
@@ -364,6 +379,7 @@ impl PreparedScene {
                 let (a, b) = (p.x - p.x.floor() > 0.5, p.y - p.y.floor() > 0.5);
                 if a == b { *color0 } else { *color1 }
             }
+            TextureSpec::MeshAttribute { .. } => DVec3::ZERO,
         }
     }
 }

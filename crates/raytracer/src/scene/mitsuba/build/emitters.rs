@@ -5,7 +5,7 @@ use glam::{DMat3, DVec3, DVec4};
 use super::super::{Plugin, PluginKind};
 use super::{Builder, Props};
 use crate::light::Emitter;
-use crate::material::Param;
+use crate::material::{Param, TextureSpec};
 use crate::scene::Diagnostic;
 
 impl<'a> Builder<'a> {
@@ -32,6 +32,12 @@ impl<'a> Builder<'a> {
                 let texture = match props.named_child("texture") {
                     None => None,
                     Some(t) if t.kind == PluginKind::Texture => match self.texture(t)? {
+                        Param::Texture(spec) if matches!(*spec, TextureSpec::MeshAttribute { .. }) => {
+                            return Err(props.error_at(
+                                t.pos,
+                                "the spot's `texture` cannot be a `mesh_attribute` (it has no mesh)",
+                            ));
+                        }
                         Param::Texture(spec) => Some(spec),
                         Param::Constant(_) => {
                             return Err(props.error_at(

@@ -11,6 +11,7 @@ use glam::{DMat3, DMat4, DVec3};
 
 use super::super::{Plugin, PluginKind};
 use super::{Builder, Props};
+use crate::base::diagnostic::clip;
 use crate::geometry::mesh::smooth_normals;
 use crate::geometry::mesh_file::MeshData;
 use crate::geometry::obj::load_obj;
@@ -18,7 +19,8 @@ use crate::geometry::ply::read_ply;
 use crate::geometry::serialized::read_serialized;
 use crate::geometry::{MeshTransform, MeshVertices, Shape, Sphere, TriangleIndices, TriangleMesh};
 use crate::light::Emitter;
-use crate::scene::{Diagnostic, Primitive};
+use crate::material::{Material, Param, TextureSpec};
+use crate::scene::{Diagnostic, Primitive, Severity};
 
 /// Segments around the circle of a `disk` or `cylinder`: the area of the polygon is within
 /// 2.6e-5 of the circle's.
@@ -52,6 +54,7 @@ impl<'a> Builder<'a> {
             return Ok(());
         };
         let material = self.shape_material(&props)?;
+        check_mesh_attributes(&props, &shape, &material)?;
         let index = self.scene.primitives.len() as u32;
         self.scene.primitives.push(Primitive { shape, material });
         for (_, emitter) in props.children(PluginKind::Emitter) {
@@ -224,6 +227,40 @@ impl<'a> Builder<'a> {
     }
 }
 
+/// Refuses a `mesh_attribute` texture of `material` that `shape` lacks (Mitsuba's "Invalid
+/// attribute requested" when it renders), at the texture, naming the shape's file and line and
+/// the attributes it has.
+fn check_mesh_attributes(props: &Props<'_>, shape: &Shape, material: &Material) -> Result<(), Diagnostic> {
+    for param in material.params() {
+        let Param::Texture(t) = param else { continue };
+        let TextureSpec::MeshAttribute { name, location, .. } = &**t else { continue };
+        let mesh = match shape {
+            Shape::Mesh(m) => Some(m),
+            _ => None,
+        };
+        if mesh.is_some_and(|m| m.attribute(name).is_some()) {
+            continue;
+        }
+        let at = props.error("").location.map_or(String::new(), |l| format!("{}:{}", l.file, l.span.line));
+        let what = match props.string("filename")? {
+            Some((file, _)) => format!("the mesh `{}` of the shape at {at}", clip(file)),
+            None => format!("the `{}` shape at {at}", props.type_name()),
+        };
+        let has: Vec<String> = mesh
+            .map(|m| m.vertices().attributes.iter().map(|a| format!("`{}`", a.name)).collect())
+            .unwrap_or_default();
+        let has =
+            if has.is_empty() { "it has none".to_owned() } else { format!("it has {}", has.join(", ")) };
+        return Err(Diagnostic {
+            severity: Severity::Error,
+            message: format!("{what} has no mesh attribute `{}`: {has}", clip(name)),
+            location: Some(location.clone()),
+            notes: Vec::new(),
+        });
+    }
+    Ok(())
+}
+
 /// A mesh in its own coordinates: vertices and indexed triangles.
 struct Indexed {
     vertices: MeshVertices,
@@ -251,7 +288,12 @@ impl Indexed {
             })
             .collect();
         Indexed {
-            vertices: MeshVertices { positions: data.positions, normals, uvs: data.uvs.unwrap_or_default() },
+            vertices: MeshVertices {
+                positions: data.positions,
+                normals,
+                uvs: data.uvs.unwrap_or_default(),
+                attributes: data.attributes,
+            },
             triangles,
         }
     }

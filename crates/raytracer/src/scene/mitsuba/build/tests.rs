@@ -297,3 +297,86 @@ fn a_checkerboard_read_as_a_scalar_takes_mitsubas_other_phase() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A triangle whose corners are red, green and blue (`vertex_color`) and whose face is grey
+/// (`face_color`), as a PLY file in a temporary folder with `scene` (its `{MESH}` replaced by
+/// the mesh's name) beside it; the scene read.
+fn with_coloured_triangle(
+    scene: &str,
+) -> (tempfile::TempDir, Result<super::Built, Vec<crate::scene::Diagnostic>>) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+property float color_0\nproperty float color_1\nproperty float color_2\nelement face 1\n\
+property list uchar int vertex_indices\nproperty float color_0\nproperty float color_1\nproperty float color_2\n\
+end_header\n0 0 0 1 0 0\n1 0 0 0 1 0\n0 1 0 0 0 1\n3 0 1 2 0.5 0.5 0.5\n";
+    std::fs::write(dir.path().join("tri.ply"), ply).expect("write the mesh");
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, scene.replace("{MESH}", "tri.ply")).expect("write the scene");
+    let doc = crate::scene::mitsuba::read_file(&path, &[]).expect("reads");
+    (dir, build(&doc))
+}
+
+fn mesh_attribute_scene(name: &str, shape: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">{SENSOR}
+<shape type="{shape}"><string name="filename" value="{{MESH}}"/>
+    <bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance">
+        <string name="name" value="{name}"/><float name="scale" value="0.5"/></texture></bsdf>
+</shape></scene>"#
+    )
+}
+
+#[test]
+fn a_mesh_attribute_reads_the_vertex_and_face_values_of_its_mesh() {
+    for (name, b1, b2, expected) in [
+        // Barycentric over the corners' colours.
+        ("vertex_color", 0.25f32, 0.5f32, DVec3::new(0.25, 0.25, 0.5)),
+        // Constant over the face.
+        ("face_color", 0.25, 0.5, DVec3::splat(0.5)),
+    ] {
+        let (_dir, b) = with_coloured_triangle(&mesh_attribute_scene(name, "ply"));
+        let b = b.unwrap_or_else(|e| panic!("{e:#?}"));
+        let Material::Diffuse { reflectance: Param::Texture(t) } = &*b.scene.primitives[0].material else {
+            panic!("{:?}", b.scene.primitives[0].material)
+        };
+        let crate::material::TextureSpec::MeshAttribute { name: n, scale, .. } = &**t else {
+            panic!("{t:?}")
+        };
+        assert_eq!((n.as_str(), *scale), (name, 0.5));
+        let crate::geometry::Shape::Mesh(mesh) = &b.scene.primitives[0].shape else { panic!("a mesh") };
+        let attribute = mesh.attribute(name).expect("the attribute");
+        let v = mesh.attribute_value(attribute, 0, b1, b2);
+        assert!((v - expected).length() < 1e-6, "{name}: {v}");
+    }
+}
+
+#[test]
+fn a_mesh_attribute_the_shape_lacks_is_an_error_at_the_texture() {
+    let (_dir, b) = with_coloured_triangle(&mesh_attribute_scene("vertex_colour", "ply"));
+    let e = b.expect_err("no such attribute");
+    let e = e.iter().find(|d| d.is_error()).expect("an error");
+    assert_eq!(e.message.split(" of the shape at ").next(), Some("the mesh `tri.ply`"), "{}", e.message);
+    assert!(
+        e.message.ends_with(
+            "scene.xml:8 has no mesh attribute `vertex_colour`: it has `vertex_color`, `face_color`"
+        ),
+        "{}",
+        e.message
+    );
+    let at = e.location.as_ref().expect("a place");
+    assert!(at.file.ends_with("scene.xml") && at.span.line == 9, "{at:?}");
+    // Not a mesh: none.
+    let (_dir, b) = with_coloured_triangle(
+        &mesh_attribute_scene("vertex_color", "sphere")
+            .replace(r#"<string name="filename" value="{MESH}"/>"#, ""),
+    );
+    let e = b.expect_err("a sphere has no attributes");
+    assert!(
+        e.iter().any(|d| d.message.contains("the `sphere` shape at") && d.message.ends_with("it has none")),
+        "{e:#?}"
+    );
+    // Neither `vertex_` nor `face_`.
+    let (_dir, b) = with_coloured_triangle(&mesh_attribute_scene("color", "ply"));
+    let e = b.expect_err("a bad name");
+    assert!(e.iter().any(|d| d.message.contains("starts with `vertex_` or `face_`, not `color`")), "{e:#?}");
+}
