@@ -58,7 +58,7 @@ const WHOLE_Z_LIMIT: f64 = 4.5;
 
 /// The scenes compared in CI: every supported BSDF, emitter, shape, texture and integrator
 /// appears in at least one.
-const CI_SCENES: [&str; 24] = [
+const CI_SCENES: [&str; 25] = [
     "scenes/cbox/cbox.xml",
     "scenes/matpreview/matpreview.xml",
     "docs/scenes/bsdf_diffuse_textured.xml",
@@ -75,6 +75,7 @@ const CI_SCENES: [&str; 24] = [
     "docs/scenes/bsdf_bumpmap_with.xml",
     "docs/scenes/emitter_spot_no_texture.xml",
     "docs/scenes/emitter_spot_texture.xml",
+    "docs/scenes/emitter_projector_textured.xml",
     "docs/scenes/integrator_direct_both.xml",
     "docs/scenes/integrator_depth_2.xml",
     "docs/scenes/shape_disk.xml",

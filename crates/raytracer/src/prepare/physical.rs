@@ -92,11 +92,15 @@ fn bitmap_specs(scene: &Scene) -> Vec<&Arc<TextureSpec>> {
     let mut seen = HashMap::new();
     let mut out = Vec::new();
     for e in &scene.emitters {
-        if let Emitter::Spot { texture: Some(t), .. } = e
-            && matches!(**t, TextureSpec::Bitmap { .. })
-            && seen.insert(Arc::as_ptr(t) as usize, ()).is_none()
+        let texture = match e {
+            Emitter::Spot { texture: Some(t), .. } => t,
+            Emitter::Projector { irradiance: Param::Texture(t), .. } => t,
+            _ => continue,
+        };
+        if matches!(**texture, TextureSpec::Bitmap { .. })
+            && seen.insert(Arc::as_ptr(texture) as usize, ()).is_none()
         {
-            out.push(t);
+            out.push(texture);
         }
     }
     for p in &scene.primitives {
@@ -332,6 +336,15 @@ impl PreparedScene {
         let m = to_uv.matrix2;
         let (w, h) = (bitmap.width() as f64, bitmap.height() as f64);
         (w * (m.x_axis.x * gx + m.x_axis.y * gy), h * (m.y_axis.x * gx + m.y_axis.y * gy))
+    }
+
+    /// A texture's resolution as Mitsuba's `resolution()` gives it: a loaded bitmap's width and
+    /// height, `(1, 1)` for any other texture (and for a bitmap the scene did not load).
+    pub fn texture_resolution(&self, spec: &Arc<TextureSpec>) -> (u32, u32) {
+        match self.physical.bitmaps.get(&(Arc::as_ptr(spec) as usize)) {
+            Some(b) => (b.width(), b.height()),
+            None => (1, 1),
+        }
     }
 
     /// A colour parameter at an interaction.

@@ -1,10 +1,11 @@
-//! `<emitter>` plugins outside shapes: `point`, `spot`, `directional`, `constant`, `envmap`.
+//! `<emitter>` plugins outside shapes: `point`, `spot`, `projector`, `directional`, `constant`,
+//! `envmap`.
 
 use glam::{DMat3, DVec3, DVec4};
 
 use super::super::{Plugin, PluginKind};
 use super::{Builder, Props};
-use crate::light::Emitter;
+use crate::light::{Emitter, FovAxis};
 use crate::material::{Param, TextureSpec};
 use crate::scene::Diagnostic;
 
@@ -67,6 +68,37 @@ impl<'a> Builder<'a> {
                     to_local: linear.inverse(),
                 }
             }
+            "projector" => {
+                let to_world = props.transform("to_world")?;
+                if DMat3::from_mat4(to_world).determinant().abs() < 1e-300 || !to_world.is_finite() {
+                    return Err(props.error("the projector's `to_world` is singular"));
+                }
+                let irradiance =
+                    match props.get("irradiance").is_some() || props.named_child("irradiance").is_some() {
+                        true => self.param(&props, "irradiance", 1.0)?,
+                        false => {
+                            return Err(props.error(
+                            "a `projector` needs an `irradiance` (a colour, or a texture such as a `bitmap`)",
+                        ));
+                        }
+                    };
+                if let crate::material::Param::Texture(t) = &irradiance
+                    && matches!(**t, TextureSpec::MeshAttribute { .. })
+                {
+                    return Err(props.error(
+                        "the projector's `irradiance` cannot be a `mesh_attribute` (it has no mesh)",
+                    ));
+                }
+                let (tan_half, fov_axis) = fov(&props)?;
+                Emitter::Projector {
+                    irradiance,
+                    scale: props.float("scale", 1.0)?,
+                    tan_half,
+                    fov_axis,
+                    to_world,
+                    to_local: to_world.inverse(),
+                }
+            }
             "directional" => {
                 let to_world = props.transform("to_world")?;
                 let given = props.vector("direction", DVec3::ZERO)?;
@@ -125,4 +157,29 @@ impl<'a> Builder<'a> {
         self.push_emitter(emitter);
         Ok(())
     }
+}
+
+/// A perspective device's field of view as Mitsuba's `parse_fov` reads it: `fov` (degrees,
+/// between 0 and 180) along `fov_axis` (`x`), or `focal_length` (`50mm`) on 35 mm film along
+/// the diagonal, not both. Returns the tangent of the half-angle and its axis.
+fn fov(props: &Props<'_>) -> Result<(f64, FovAxis), Diagnostic> {
+    if props.get("fov").is_some() {
+        if props.get("focal_length").is_some() {
+            return Err(props.error("give `fov` or `focal_length`, not both"));
+        }
+        let fov = props.float("fov", 0.0)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(props.error("`fov` must be an angle between 0 and 180 degrees"));
+        }
+        let axis = props.choice("fov_axis", &FovAxis::NAMES, "x")?;
+        return Ok(((fov.to_radians() / 2.0).tan(), FovAxis::parse(axis).unwrap_or(FovAxis::X)));
+    }
+    let (mm, pos) = props.string("focal_length")?.unwrap_or(("50mm", props.plugin.pos));
+    let f: f64 = mm.trim_end_matches("mm").parse().unwrap_or(f64::NAN);
+    if !(f > 0.0 && f.is_finite()) {
+        let text = crate::base::diagnostic::clip(mm);
+        return Err(props.error_at(pos, format!("`focal_length` must be like `50mm`, not `{text}`")));
+    }
+    props.ignore("fov_axis");
+    Ok((36f64.hypot(24.0) / 2.0 / f, FovAxis::Diagonal))
 }

@@ -380,3 +380,52 @@ fn a_mesh_attribute_the_shape_lacks_is_an_error_at_the_texture() {
     let e = b.expect_err("a bad name");
     assert!(e.iter().any(|d| d.message.contains("starts with `vertex_` or `face_`, not `color`")), "{e:#?}");
 }
+
+fn projector(inner: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">{SENSOR}
+<emitter type="projector">
+    <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+    {inner}
+</emitter></scene>"#
+    )
+}
+
+#[test]
+fn a_projector_keeps_its_image_field_of_view_and_frame() {
+    let b = built(&projector(
+        r#"<float name="fov" value="90"/><float name="scale" value="2"/><rgb name="irradiance" value="1, 2, 3"/>"#,
+    ));
+    let Emitter::Projector { irradiance, scale, tan_half, fov_axis, to_world, to_local } =
+        &b.scene.emitters[0]
+    else {
+        panic!("{:?}", b.scene.emitters)
+    };
+    assert_eq!(
+        (irradiance, *scale, *fov_axis),
+        (&Param::Constant(DVec3::new(1.0, 2.0, 3.0)), 2.0, crate::light::FovAxis::X)
+    );
+    assert!((tan_half - 1.0).abs() < 1e-12);
+    assert!((to_world.transform_vector3(DVec3::Z) - DVec3::Z).length() < 1e-12);
+    assert!((*to_local * *to_world - glam::DMat4::IDENTITY).abs_diff_eq(glam::DMat4::ZERO, 1e-12));
+    // Mitsuba's default: 50 mm on 35 mm film, along the diagonal.
+    let b = built(&projector(r#"<rgb name="irradiance" value="1"/>"#));
+    let Emitter::Projector { tan_half, fov_axis, .. } = &b.scene.emitters[0] else { panic!() };
+    assert_eq!(*fov_axis, crate::light::FovAxis::Diagonal);
+    assert!((tan_half - 36f64.hypot(24.0) / 100.0).abs() < 1e-12);
+    // The horizontal half-angle of a diagonal field of view on a 2:1 image.
+    assert!((crate::light::FovAxis::Diagonal.tan_half_x(1.0, 2.0) - 2.0 / 5f64.sqrt()).abs() < 1e-12);
+    assert!((crate::light::FovAxis::Larger.tan_half_x(1.0, 0.5) - 0.5).abs() < 1e-12);
+}
+
+#[test]
+fn a_projector_needs_an_irradiance_and_one_field_of_view() {
+    let e = errors(&projector(r#"<float name="fov" value="30"/>"#));
+    assert!(e.iter().any(|m| m.contains("needs an `irradiance`")), "{e:?}");
+    let e = errors(&projector(
+        r#"<float name="fov" value="30"/><string name="focal_length" value="35mm"/><rgb name="irradiance" value="1"/>"#,
+    ));
+    assert!(e.iter().any(|m| m.contains("not both")), "{e:?}");
+    let e = errors(&projector(r#"<float name="fov" value="180"/><rgb name="irradiance" value="1"/>"#));
+    assert!(e.iter().any(|m| m.contains("between 0 and 180")), "{e:?}");
+}
