@@ -76,7 +76,7 @@ const CI_SCENES: [&str; 25] = [
     "docs/scenes/emitter_spot_no_texture.xml",
     "docs/scenes/emitter_spot_texture.xml",
     "docs/scenes/emitter_projector_textured.xml",
-    "docs/scenes/integrator_direct_both.xml",
+    "docs/scenes/integrator_direct_bsdf.xml",
     "docs/scenes/integrator_depth_2.xml",
     "docs/scenes/shape_disk.xml",
     "docs/scenes/shape_cylinder_onesided.xml",
@@ -86,20 +86,19 @@ const CI_SCENES: [&str; 25] = [
     "docs/scenes/texture_mesh_attribute_vertex.xml",
 ];
 
+/// Why the Veach scene's `direct` renders with emitter samples are not compared.
+const SMALL_SPHERE_SEEN: &str = "the Veach scene's smallest sphere lights (radius 0.033, radiance 902; radius 0.1, radiance 100) seen \
+     directly cover a pixel or two: rayterra draws each pixel's samples from the Gaussian filter's density, so the pixels at \
+     their edges are heavy-tailed (a few samples of 902 or none), which two halves of 64 samples \
+     estimate low, where Mitsuba's splatting gives them smooth values; only blocks at those \
+     spheres differ (z 5.5 to 17.6, rayterra's values scattered about Mitsuba's), every other block \
+     agrees (`integrator_direct_bsdf`, the same scene, agrees throughout)";
+
 /// Scenes where rayterra and Mitsuba 3.9.1 knowingly differ, with why; they are reported, not
 /// compared.
 const KNOWN_DIFFERENCES: [(&str, &str); 5] = [
-    (
-        "integrator_direct_bsdf",
-        "rayterra renders `direct` as the path tracer at depth 2 with both strategies; Mitsuba's `direct` \
-         with BSDF samples only differs by up to 12% in blocks of the Veach scene's plates (z 23): not yet \
-         understood",
-    ),
-    (
-        "integrator_direct_lum",
-        "rayterra renders `direct` as the path tracer at depth 2 with both strategies; Mitsuba's `direct` \
-         with emitter samples only is 5% darker over the whole image (z 11 in a block): not yet understood",
-    ),
+    ("integrator_direct_both", SMALL_SPHERE_SEEN),
+    ("integrator_direct_lum", SMALL_SPHERE_SEEN),
     (
         "shape_disk_parameterization",
         "the disk's texture coordinates differ from Mitsuba's (the image's mean agrees within 0.12%, the \

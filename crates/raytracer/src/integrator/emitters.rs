@@ -99,8 +99,20 @@ fn mean(c: DVec3) -> f64 {
 }
 
 impl<'s> Emitters<'s> {
-    /// The emitters of `scene`.
+    /// The emitters of `scene`, chosen in proportion to their estimated power.
     pub fn new(scene: &'s PreparedScene) -> Emitters<'s> {
+        Emitters::with_choice(scene, false)
+    }
+
+    /// The emitters of `scene`, each chosen with the same probability, as Mitsuba 3.9.1 chooses
+    /// them (every emitter's `sampling_weight` is 1 by default): the same expectation as
+    /// [`Emitters::new`], and Mitsuba's noise (which its `direct` integrator with emitter
+    /// samples alone shows plainly, on scenes of lights of very different powers).
+    pub fn uniform(scene: &'s PreparedScene) -> Emitters<'s> {
+        Emitters::with_choice(scene, true)
+    }
+
+    fn with_choice(scene: &'s PreparedScene, uniform: bool) -> Emitters<'s> {
         let s = &scene.scene;
         let mut b = Bounds::EMPTY.include(s.camera.eye);
         for p in &s.primitives {
@@ -184,6 +196,9 @@ impl<'s> Emitters<'s> {
             };
             shapes.push(shape);
             powers.push(power);
+        }
+        if uniform {
+            powers.iter_mut().for_each(|p| *p = 1.0);
         }
         Emitters { scene, choose: Discrete::new(&powers), shapes, projections, environment, map, radius }
     }

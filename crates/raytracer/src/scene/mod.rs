@@ -64,6 +64,20 @@ pub struct SceneRender {
     /// Whether 8-bit output is sRGB-encoded by default (Mitsuba's convention); course files
     /// write their values as they are unless `--gamma` is given.
     pub srgb_output: bool,
+    /// Mitsuba's `direct` integrator (direct lighting only, with its sample counts) instead of
+    /// the path tracer, when the file asks for it.
+    pub direct: Option<DirectSamples>,
+}
+
+/// The sample counts of Mitsuba's `direct` integrator: at each surface seen from the camera,
+/// `emitter_samples` emitter samples and `bsdf_samples` BSDF samples (at least one in all),
+/// weighted by Mitsuba's power heuristic over both counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DirectSamples {
+    /// Emitter samples (`emitter_samples`, default `shading_samples`, 1).
+    pub emitter_samples: u32,
+    /// BSDF samples (`bsdf_samples`, default `shading_samples`, 1).
+    pub bsdf_samples: u32,
 }
 
 impl Default for SceneRender {
@@ -75,6 +89,7 @@ impl Default for SceneRender {
             hide_emitters: false,
             filter: PixelFilter::Box,
             srgb_output: false,
+            direct: None,
         }
     }
 }

@@ -429,3 +429,35 @@ fn a_projector_needs_an_irradiance_and_one_field_of_view() {
     let e = errors(&projector(r#"<float name="fov" value="180"/><rgb name="irradiance" value="1"/>"#));
     assert!(e.iter().any(|m| m.contains("between 0 and 180")), "{e:?}");
 }
+
+#[test]
+fn the_direct_integrator_keeps_its_sample_counts() {
+    let scene = |inner: &str| {
+        format!(r#"<scene version="3.0.0"><integrator type="direct">{inner}</integrator>{SENSOR}</scene>"#)
+    };
+    let direct = |inner: &str| built(&scene(inner)).scene.render.direct;
+    use crate::scene::DirectSamples;
+    assert_eq!(direct(""), Some(DirectSamples { emitter_samples: 1, bsdf_samples: 1 }));
+    assert_eq!(
+        direct(r#"<integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="3"/>"#),
+        Some(DirectSamples { emitter_samples: 0, bsdf_samples: 3 })
+    );
+    assert_eq!(
+        direct(r#"<integer name="shading_samples" value="4"/>"#),
+        Some(DirectSamples { emitter_samples: 4, bsdf_samples: 4 })
+    );
+    assert_eq!(built(&scene("")).scene.render.max_depth, Some(2));
+    let e = errors(&scene(
+        r#"<integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="0"/>"#,
+    ));
+    assert!(e.iter().any(|m| m.contains("at least one emitter or BSDF sample")), "{e:?}");
+    let e = errors(&scene(
+        r#"<integer name="shading_samples" value="2"/><integer name="bsdf_samples" value="1"/>"#,
+    ));
+    assert!(e.iter().any(|m| m.contains("not both")), "{e:?}");
+    let e = errors(&scene(r#"<integer name="bsdf_samples" value="-1"/>"#));
+    assert!(e.iter().any(|m| m.contains("`bsdf_samples` must be from 0")), "{e:?}");
+    // The path integrator has none.
+    let b = built(&format!(r#"<scene version="3.0.0"><integrator type="path"/>{SENSOR}</scene>"#));
+    assert_eq!(b.scene.render.direct, None);
+}
