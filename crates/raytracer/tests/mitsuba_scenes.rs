@@ -96,19 +96,9 @@ const SMALL_SPHERE_SEEN: &str = "the Veach scene's smallest sphere lights (radiu
 
 /// Scenes where rayterra and Mitsuba 3.9.1 knowingly differ, with why; they are reported, not
 /// compared.
-const KNOWN_DIFFERENCES: [(&str, &str); 5] = [
+const KNOWN_DIFFERENCES: [(&str, &str); 3] = [
     ("integrator_direct_both", SMALL_SPHERE_SEEN),
     ("integrator_direct_lum", SMALL_SPHERE_SEEN),
-    (
-        "shape_disk_parameterization",
-        "the disk's texture coordinates differ from Mitsuba's (the image's mean agrees within 0.12%, the \
-         texture's pattern does not)",
-    ),
-    (
-        "shape_sphere_parameterization",
-        "the sphere's texture coordinates ignore its to_world rotation (the image's mean agrees within 0.07%, \
-         the texture's pattern does not)",
-    ),
     (
         "bsdf_blendbsdf",
         "Mitsuba renders a `blendbsdf` that holds a smooth (delta) BSDF darker than the blend of its two \

@@ -13,7 +13,7 @@ mod search;
 
 pub use interaction::Interaction;
 use load::{load_meshes, load_textures};
-pub use physical::{EnvironmentMap, luminance};
+pub use physical::{EnvironmentMap, luminance, sphere_local, sphere_world};
 use physical::{Physical, load_physical};
 use queries::FlatSet;
 pub use search::{Located, TextureSearch};

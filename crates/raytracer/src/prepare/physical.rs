@@ -215,13 +215,15 @@ impl PreparedScene {
     }
 
     /// Mitsuba's texture coordinates at an interaction: a mesh's `(u, v)` as its file gives them
-    /// (the barycentric weights without), a sphere's `(phi / 2 pi, theta / pi)` about `+z`.
+    /// (the barycentric weights without), a sphere's `(phi / 2 pi, theta / pi)` in its own frame
+    /// (`to_world`'s rotation: the pole its local `+z`, `phi = 0` its local `+x`; see
+    /// [`sphere_local`]).
     #[inline]
     pub fn surface_uv(&self, at: &Interaction) -> (f64, f64) {
         let shape = &self.scene.primitives[at.primitive as usize].shape;
         match (shape, at.part) {
             (Shape::Sphere(s), _) => {
-                let d = (at.point - s.centre) / s.radius;
+                let d = sphere_local(s, (at.point - s.centre) / s.radius);
                 let phi = d.y.atan2(d.x) / TAU;
                 (phi - phi.floor(), d.z.clamp(-1.0, 1.0).acos() / PI)
             }
@@ -243,7 +245,10 @@ impl PreparedScene {
         let shape = &self.scene.primitives[at.primitive as usize].shape;
         let dpdu = match (shape, at.part) {
             (Shape::Mesh(m), ShapePart::Triangle { index, .. }) => m.dp_ds(index),
-            (Shape::Sphere(s), _) => Some(DVec3::new(s.centre.y - at.point.y, at.point.x - s.centre.x, 0.0)),
+            (Shape::Sphere(s), _) => {
+                let d = sphere_local(s, at.point - s.centre);
+                Some(sphere_world(s, DVec3::new(-d.y, d.x, 0.0)))
+            }
             _ => None,
         };
         let outward = if at.front { at.geometric } else { -at.geometric };
@@ -260,7 +265,7 @@ impl PreparedScene {
         match (shape, at.part) {
             (Shape::Mesh(m), ShapePart::Triangle { index, .. }) => m.dp_dst(index),
             (Shape::Sphere(s), _) => {
-                let d = at.point - s.centre;
+                let d = sphere_local(s, at.point - s.centre);
                 let rho = d.x.hypot(d.y);
                 let dpdu = DVec3::new(-d.y, d.x, 0.0) * TAU;
                 let dpdv = if rho > 0.0 {
@@ -268,7 +273,7 @@ impl PreparedScene {
                 } else {
                     DVec3::new(d.z, 0.0, 0.0) * PI
                 };
-                Some((dpdu, dpdv))
+                Some((sphere_world(s, dpdu), sphere_world(s, dpdv)))
             }
             _ => None,
         }
@@ -395,6 +400,23 @@ impl PreparedScene {
             TextureSpec::MeshAttribute { .. } => DVec3::ZERO,
         }
     }
+}
+
+/// A world vector in a sphere's own frame, Mitsuba's `to_object` rotation: `z` along its
+/// [`Sphere::pole`](crate::geometry::Sphere::pole), `y` along its
+/// [`Sphere::seam`](crate::geometry::Sphere::seam), `x = y x z` (the Mitsuba builder sets them to
+/// `to_world`'s local `+z` and `+y`; the default frame, `+z` and `+y`, is the world's).
+#[inline]
+pub fn sphere_local(s: &crate::geometry::Sphere, v: DVec3) -> DVec3 {
+    let (z, y) = (s.pole(), s.seam());
+    DVec3::new(v.dot(y.cross(z)), v.dot(y), v.dot(z))
+}
+
+/// A vector of a sphere's own frame in the world (the inverse of [`sphere_local`]).
+#[inline]
+pub fn sphere_world(s: &crate::geometry::Sphere, v: DVec3) -> DVec3 {
+    let (z, y) = (s.pole(), s.seam());
+    y.cross(z) * v.x + y * v.y + z * v.z
 }
 
 /// The luminance of a linear sRGB colour (Rec. 709 weights, as Mitsuba's `luminance`).

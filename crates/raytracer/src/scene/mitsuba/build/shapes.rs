@@ -161,8 +161,14 @@ impl<'a> Builder<'a> {
                 if !uniform || !orthogonal {
                     return Err(props.error("a sphere's `to_world` must scale it alike along every axis"));
                 }
-                let sphere = Sphere::new(to_world.transform_point3(centre), radius * scales[0])
-                    .map_err(|e| props.error(e.to_string()))?;
+                // Its frame (for its texture coordinates): `to_world`'s local `+z` and `+y`.
+                let sphere = Sphere::with_frame(
+                    to_world.transform_point3(centre),
+                    radius * scales[0],
+                    linear.z_axis / scales[2],
+                    linear.y_axis / scales[1],
+                )
+                .map_err(|e| props.error(e.to_string()))?;
                 self.finish(props);
                 return Ok(Some(Shape::Sphere(sphere)));
             }
@@ -356,13 +362,14 @@ impl Indexed {
     }
 
     /// Mitsuba's `disk`: the unit disk in the plane `z = 0`, facing `+z`, as a fan of
-    /// [`CIRCLE_SEGMENTS`] triangles; texture coordinates polar (`u` the radius, `v` the angle
-    /// over a turn).
+    /// [`CIRCLE_SEGMENTS`] triangles; texture coordinates polar, as Mitsuba's: `u` the radius,
+    /// `v` the angle over a turn from `+x`. The centre has one texture coordinate per triangle
+    /// (`v` the triangle's middle angle), so that `v` stays the angle towards the centre (within
+    /// half a segment, 1/1024 of a turn) rather than running to 0 there.
     fn disk() -> Indexed {
         let mut v = MeshVertices::default();
         v.positions.push([0.0; 3]);
         v.normals.push([0.0, 0.0, 1.0]);
-        v.uvs.push([0.0, 0.0]);
         let n = CIRCLE_SEGMENTS;
         for i in 0..=n {
             let phi = TAU * i as f64 / n as f64;
@@ -370,10 +377,14 @@ impl Indexed {
             v.normals.push([0.0, 0.0, 1.0]);
             v.uvs.push([1.0, (i as f64 / n as f64) as f32]);
         }
-        let triangles = (1..=n)
+        // The centre's texture coordinates, one per triangle, after the rim's n + 1.
+        for i in 0..n {
+            v.uvs.push([0.0, ((i as f64 + 0.5) / n as f64) as f32]);
+        }
+        let triangles = (0..n)
             .map(|i| {
-                let t = [0, i, i + 1];
-                TriangleIndices { position: t, normal: t, uv: t }
+                let t = [0, i + 1, i + 2];
+                TriangleIndices { position: t, normal: t, uv: [n + 1 + i, i, i + 1] }
             })
             .collect();
         Indexed { vertices: v, triangles }

@@ -461,3 +461,31 @@ fn the_direct_integrator_keeps_its_sample_counts() {
     let b = built(&format!(r#"<scene version="3.0.0"><integrator type="path"/>{SENSOR}</scene>"#));
     assert_eq!(b.scene.render.direct, None);
 }
+
+#[test]
+fn spheres_and_disks_have_mitsubas_texture_coordinates() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <shape type="sphere"><transform name="to_world"><rotate z="1" angle="90"/><scale value="2"/></transform></shape>
+        <shape type="disk"/>
+        </scene>"#
+    ));
+    // The sphere's frame is `to_world`'s rotation: world +x is its local -y, world +y its +x.
+    let crate::geometry::Shape::Sphere(s) = &b.scene.primitives[0].shape else { panic!("a sphere") };
+    let local = |v: DVec3| crate::prepare::sphere_local(s, v);
+    assert!(
+        close(local(DVec3::X), -DVec3::Y)
+            && close(local(DVec3::Y), DVec3::X)
+            && close(local(DVec3::Z), DVec3::Z)
+    );
+    assert!(close(crate::prepare::sphere_world(s, DVec3::X), DVec3::Y));
+    // The disk: `v` is the angle over a turn, even near the centre.
+    let crate::geometry::Shape::Mesh(m) = &b.scene.primitives[1].shape else { panic!("a mesh") };
+    let index = 100;
+    let p = m.point_at(index, 0.01, 0.01);
+    // Course order `(t, s)`: `s` is Mitsuba's `u`.
+    let (v, u) = m.texture_coordinates(index, 0.01, 0.01);
+    let angle = p.y.atan2(p.x) / std::f64::consts::TAU;
+    assert!((u - p.truncate().length()).abs() < 1e-4, "u {u} at radius {}", p.truncate().length());
+    assert!((v - angle).abs() < 1e-3, "v {v} at angle {angle}");
+}
