@@ -188,6 +188,10 @@ pub struct CameraSettings {
     /// from the plane through `eye` at right angles to it, and `lens_width` x `lens_height`
     /// is the size of the visible rectangle in scene units. Course cameras are perspective.
     pub orthographic: bool,
+    /// Where the image's centre lies on the image plane, off the view direction: `(right, up)`
+    /// in the plane's units (those of `lens_width` and `lens_height`; 0 for a centred image,
+    /// the course's). A Mitsuba film's crop window renders a part of its film this way.
+    pub window_offset: (f64, f64),
 }
 
 /// The light-transport model named by the camera key `algorithm=` (students' renderers of the
@@ -248,6 +252,7 @@ impl Default for CameraSettings {
             algorithm: None,
             up: None,
             orthographic: false,
+            window_offset: (0.0, 0.0),
         }
     }
 }

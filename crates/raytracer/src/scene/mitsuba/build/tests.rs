@@ -489,3 +489,43 @@ fn spheres_and_disks_have_mitsubas_texture_coordinates() {
     assert!((u - p.truncate().length()).abs() < 1e-4, "u {u} at radius {}", p.truncate().length());
     assert!((v - angle).abs() < 1e-3, "v {v} at angle {angle}");
 }
+
+#[test]
+fn a_crop_window_renders_its_part_of_the_film() {
+    for sensor in ["perspective", "orthographic", "thinlens"] {
+        let scene = |crop: &str| {
+            format!(
+                r#"<scene version="3.0.0"><sensor type="{sensor}"><float name="fov" value="50"/>
+                <transform name="to_world"><lookat origin="1, 2, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+                <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="32"/>{crop}</film>
+                </sensor></scene>"#
+            )
+        };
+        let full = built(&scene("")).scene.camera;
+        let cropped = built(&scene(
+            r#"<integer name="crop_offset_x" value="40"/><integer name="crop_offset_y" value="5"/>
+            <integer name="crop_width" value="16"/><integer name="crop_height" value="20"/>"#,
+        ))
+        .scene
+        .camera;
+        assert_eq!((cropped.image_width, cropped.image_height), (16, 20));
+        let a = crate::camera::Camera::new(&full, 64, 32, 1.0);
+        let b = crate::camera::Camera::new(&cropped, 16, 20, 1.0);
+        for (x, y) in [(0.0, 0.0), (16.0, 20.0), (3.5, 11.25)] {
+            let (ra, rb) = (a.ray(40.0 + x, 5.0 + y, (0.5, 0.5)), b.ray(x, y, (0.5, 0.5)));
+            assert!(
+                close(ra.origin, rb.origin) && close(ra.dir, rb.dir),
+                "{sensor} ({x}, {y}): {ra:?} {rb:?}"
+            );
+        }
+    }
+    let e = errors(&format!(
+        r#"<scene version="3.0.0">{}</scene>"#,
+        SENSOR.replace("<rfilter", r#"<integer name="crop_width" value="65"/><rfilter"#)
+    ));
+    assert!(
+        e.iter()
+            .any(|m| m.contains("crop window (65x32 at 0, 0) must be a non-empty part of the 64x32 film")),
+        "{e:?}"
+    );
+}
