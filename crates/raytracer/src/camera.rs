@@ -34,6 +34,9 @@ pub struct Camera {
     /// Parallel rays along `forward` from the plane through `eye`; the half vectors are then
     /// half the visible rectangle.
     orthographic: bool,
+    /// The image's centre on the image plane relative to `forward` (or to `eye`, orthographic):
+    /// `right * window_offset.0 + up * window_offset.1`.
+    centre: DVec3,
 }
 
 impl Camera {
@@ -55,6 +58,7 @@ impl Camera {
             aperture: settings.aperture,
             focal_distance: settings.focal_distance.unwrap_or(focal_distance),
             orthographic: settings.orthographic,
+            centre: right * settings.window_offset.0 + up * settings.window_offset.1,
         }
     }
 
@@ -75,9 +79,12 @@ impl Camera {
         let sx = 2.0 * x / self.width - 1.0;
         let sy = 1.0 - 2.0 * y / self.height;
         if self.orthographic {
-            return Ray::new(self.eye + self.half_height * sy + self.half_width * sx, self.forward);
+            return Ray::new(
+                self.eye + self.centre + self.half_height * sy + self.half_width * sx,
+                self.forward,
+            );
         }
-        let dir = self.forward + self.half_height * sy + self.half_width * sx;
+        let dir = self.forward + self.centre + self.half_height * sy + self.half_width * sx;
         if self.aperture <= 0.0 {
             return Ray::new(self.eye, dir);
         }

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DMat4, DVec3};
 
 use crate::geometry::{Shape, Sphere, Square};
 
@@ -106,6 +106,32 @@ pub enum Emitter {
         /// World directions to the spot's frame (the inverse of `to_world`'s linear part).
         to_local: DMat3,
     },
+    /// `projector`: a point light that projects an image (Mitsuba's reciprocal of a perspective
+    /// camera), a delta position at `to_world`'s origin looking along its local `+z`.
+    ///
+    /// A point `p` whose local position `q = to_local p` has `q.z > 0` sees the image at
+    /// `u = 0.5 - 0.5 q.x / (q.z tan_x)`, `v = 0.5 - 0.5 aspect q.y / (q.z tan_x)` (outside
+    /// `[0, 1]^2` it is dark), where `tan_x` is the tangent of half the horizontal field of view
+    /// and `aspect` the texture's width over its height (1 for a constant). It receives
+    /// `pi scale E(u, v) / (q.z^2 cos)` from it, `cos` the cosine between `to_world`'s `+z` (as
+    /// the matrix maps it, not normalised) and the direction to `p`: a projection of a constant
+    /// `E` on a plane facing it at distance 1 gives it the irradiance `pi scale E` (Mitsuba
+    /// 3.9.1's `projector.cpp`).
+    Projector {
+        /// The projected image: irradiance on the image plane at distance 1 (`irradiance`).
+        irradiance: crate::material::Param,
+        /// Factor on it (`scale`, default 1).
+        scale: f64,
+        /// Tangent of half the field of view along `fov_axis` (`fov`, or `focal_length` on
+        /// 35 mm film along the diagonal; default 50 mm).
+        tan_half: f64,
+        /// The image axis the field of view spans.
+        fov_axis: FovAxis,
+        /// The projector's frame to the world (`to_world`).
+        to_world: DMat4,
+        /// Its inverse.
+        to_local: DMat4,
+    },
     /// `directional`: light arriving along one direction from infinitely far.
     Directional {
         /// Unit direction the light travels in.
@@ -131,4 +157,53 @@ pub enum Emitter {
         /// `+y` is up, as in Mitsuba).
         to_world: DMat3,
     },
+}
+
+/// The image axis a field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    /// The width (`x`, the default).
+    X,
+    /// The height (`y`).
+    Y,
+    /// The diagonal (`diagonal`; a focal length's).
+    Diagonal,
+    /// The shorter side (`smaller`).
+    Smaller,
+    /// The longer side (`larger`).
+    Larger,
+}
+
+impl FovAxis {
+    /// The names of the axes as scene files write them, in the order of [`FovAxis::parse`].
+    pub const NAMES: [&'static str; 5] = ["x", "y", "diagonal", "smaller", "larger"];
+
+    /// The axis of a name of [`FovAxis::NAMES`].
+    pub fn parse(name: &str) -> Option<FovAxis> {
+        Some(match name {
+            "x" => FovAxis::X,
+            "y" => FovAxis::Y,
+            "diagonal" => FovAxis::Diagonal,
+            "smaller" => FovAxis::Smaller,
+            "larger" => FovAxis::Larger,
+            _ => return None,
+        })
+    }
+
+    /// The tangent of half the horizontal field of view, for an image of `aspect` (width over
+    /// height) whose field of view along this axis has half-angle tangent `tan_half`.
+    pub fn tan_half_x(self, tan_half: f64, aspect: f64) -> f64 {
+        let axis = match self {
+            FovAxis::Smaller if aspect >= 1.0 => FovAxis::Y,
+            FovAxis::Smaller => FovAxis::X,
+            FovAxis::Larger if aspect >= 1.0 => FovAxis::X,
+            FovAxis::Larger => FovAxis::Y,
+            a => a,
+        };
+        match axis {
+            FovAxis::Y => tan_half * aspect,
+            FovAxis::Diagonal => tan_half / (1.0 + 1.0 / (aspect * aspect)).sqrt(),
+            _ => tan_half,
+        }
+    }
 }

@@ -484,7 +484,8 @@ impl Param {
     }
 }
 
-/// A texture of the physically based materials (Mitsuba's `bitmap` and `checkerboard`).
+/// A texture of the physically based materials (Mitsuba's `bitmap`, `checkerboard` and
+/// `mesh_attribute`).
 #[derive(Clone, Debug, PartialEq)]
 pub enum TextureSpec {
     /// `bitmap`: an image file.
@@ -512,6 +513,18 @@ pub enum TextureSpec {
         color1: DVec3,
         /// Texture coordinates to checker coordinates (`to_uv`).
         to_uv: DAffine2,
+    },
+    /// `mesh_attribute`: the values a mesh file gives its vertices (interpolated over each
+    /// triangle by its barycentric weights) or its faces (constant over each), times `scale`; a
+    /// scalar attribute reads as a grey. Only on the BSDFs of meshes that have the attribute
+    /// (the builder refuses others); black where there is no mesh.
+    MeshAttribute {
+        /// The attribute's name: `vertex_...` or `face_...` (`vertex_color`, `face_color`).
+        name: String,
+        /// Factor on the values (`scale`, default 1).
+        scale: f64,
+        /// Where the scene names it (for messages).
+        location: Location,
     },
 }
 

@@ -21,6 +21,7 @@ use std::sync::{Arc, OnceLock};
 
 use glam::{DVec3, Vec3};
 
+use super::mesh_file::MeshAttribute;
 use super::triangle_set::{MeshRay, TriangleSet, degenerate};
 use super::{Bounds, Ray, ShapeHit, ShapePart};
 use crate::accel::Box32;
@@ -43,6 +44,10 @@ pub struct MeshVertices {
     pub normals: Vec<[f32; 3]>,
     /// Texture coordinates `(s, t)` as the file gives them (`vt`): `s` across, `t` up.
     pub uvs: Vec<[f32; 2]>,
+    /// Further values per vertex (indexed as the positions) or per triangle (indexed as the
+    /// triangles of a mesh of one part, every triangle kept: a Mitsuba mesh), read by the
+    /// `mesh_attribute` texture.
+    pub attributes: Vec<MeshAttribute>,
 }
 
 /// The corners of one triangle: indices into the positions, normals and texture coordinates.
@@ -250,6 +255,28 @@ impl TriangleMesh {
         }
     }
 
+    /// The attribute named `name` (`vertex_color`, `face_color`, ...), if the mesh has it.
+    #[inline]
+    pub fn attribute(&self, name: &str) -> Option<&MeshAttribute> {
+        self.vertices.attributes.iter().find(|a| a.name == name)
+    }
+
+    /// The value of `attribute` (one of this mesh's) at the barycentric point of triangle
+    /// `index`, as RGB (a scalar attribute repeated): a vertex attribute interpolated over the
+    /// triangle's corners, a face attribute constant over it.
+    #[inline]
+    pub fn attribute_value(&self, attribute: &MeshAttribute, index: u32, b1: f32, b2: f32) -> DVec3 {
+        if attribute.per_face {
+            return Vec3::from(attribute.rgb(index)).as_dvec3();
+        }
+        let [i0, i1, i2] = self.positions[index as usize];
+        let b0 = 1.0 - b1 - b2;
+        let v = Vec3::from(attribute.rgb(i0)) * b0
+            + Vec3::from(attribute.rgb(i1)) * b1
+            + Vec3::from(attribute.rgb(i2)) * b2;
+        v.as_dvec3()
+    }
+
     /// The directions in which the texture coordinates `u` and `v` grow on triangle `index`
     /// (for normal maps).
     pub fn texture_tangents(&self, index: u32) -> (DVec3, DVec3) {
@@ -362,7 +389,7 @@ mod tests {
     fn mesh(levels: u32) -> TriangleMesh {
         let (positions, tris) = sphere_mesh(levels);
         let normals = smooth_normals(&positions, &tris);
-        let vertices = Arc::new(MeshVertices { positions, normals, uvs: Vec::new() });
+        let vertices = Arc::new(MeshVertices { positions, normals, uvs: Vec::new(), attributes: Vec::new() });
         let tris: Vec<TriangleIndices> =
             tris.iter().map(|&t| TriangleIndices { position: t, normal: t, uv: [NONE; 3] }).collect();
         TriangleMesh::new(vertices, &tris)

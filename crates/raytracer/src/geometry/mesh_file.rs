@@ -25,6 +25,40 @@ pub struct MeshData {
     /// Mitsuba 3 ignores the flag (the shape's `face_normals` parameter decides); it is kept
     /// for information.
     pub face_normals: bool,
+    /// Further per-vertex and per-face values the file holds (a PLY file's colours and other
+    /// properties, named as Mitsuba names them: `vertex_color`, `face_color`, ...).
+    pub attributes: Vec<MeshAttribute>,
+}
+
+/// Values a mesh file gives each vertex or each face beyond its geometry (Mitsuba's mesh
+/// attributes), read by the `mesh_attribute` texture.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshAttribute {
+    /// The name, `vertex_...` or `face_...` (Mitsuba's: a PLY file's `red`, `green`, `blue` of
+    /// its vertices are `vertex_color`; `k_0`, `k_1`, `k_2` of its faces are `face_k`).
+    pub name: String,
+    /// Per vertex (interpolated over a triangle by its barycentric weights) or per face
+    /// (constant over it).
+    pub per_face: bool,
+    /// Values per vertex or face: 1 (a scalar) or 3 (a colour, linear RGB as stored).
+    pub components: usize,
+    /// `components` values for each vertex (in the order of the positions), or for each
+    /// triangle (in the order of the triangles: a polygon split into a fan repeats its face's
+    /// values for each of its triangles).
+    pub values: Vec<f32>,
+}
+
+impl MeshAttribute {
+    /// The values of element `index` (a vertex or a triangle) as RGB (a scalar repeated).
+    #[inline]
+    pub fn rgb(&self, index: u32) -> [f32; 3] {
+        let i = index as usize * self.components;
+        match self.values.get(i..i + self.components) {
+            Some(&[v]) => [v; 3],
+            Some(&[r, g, b]) => [r, g, b],
+            _ => [0.0; 3],
+        }
+    }
 }
 
 /// A mesh file that cannot be read: the file, the part of it (an element, a mesh, a face) and why.

@@ -258,7 +258,7 @@ pub fn parse_obj(
         })
         .collect();
     Ok(LoadedObj {
-        vertices: Arc::new(MeshVertices { positions, normals, uvs }),
+        vertices: Arc::new(MeshVertices { positions, normals, uvs, attributes: Vec::new() }),
         groups,
         warnings,
         material_libraries,

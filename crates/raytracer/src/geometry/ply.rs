@@ -1,8 +1,16 @@
 //! PLY meshes (ASCII and binary, both byte orders) through the `ply-rs-bw` crate: the `vertex`
 //! element's `x`, `y`, `z`, its normals `nx`, `ny`, `nz` and texture coordinates (`u`/`v`, `s`/`t`
 //! or `texture_u`/`texture_v`) when all of a set are declared, and the `face` element's
-//! `vertex_indices` (or `vertex_index`) lists, polygons split into fans. Other elements and
-//! properties (colours, confidence...) are read past.
+//! `vertex_indices` (or `vertex_index`) lists, polygons split into fans. The other scalar
+//! properties of vertices and faces become mesh attributes as Mitsuba 3 names them
+//! ([`MeshAttribute`]); other elements are read past.
+//!
+//! Attributes (Mitsuba's `ply.cpp`): `r`, `g`, `b` (or `red`, `green`, `blue`) are `vertex_color`
+//! (`face_color` on faces), as stored (8-bit values are not scaled to [0, 1], as in Mitsuba);
+//! then consecutive properties `PREFIX_S` with one-letter suffixes of one series, `x y z`,
+//! `r g b`, `0 1 2` or `1 2 3`, are `vertex_PREFIX` (`vertex_PREFIX_color` for `r g b`), of one
+//! or three values. Properties that fit no attribute (no suffix, two or four values, a
+//! colour with alpha) are read past.
 //!
 //! The counts of the header are checked against the file's size before any element is read
 //! (each element takes at least one byte a property in binary, two in ASCII), and the crate
@@ -14,10 +22,10 @@ use std::path::Path;
 
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
-    Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
+    ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
 };
 
-use super::mesh_file::{MeshData, MeshFileError, check_indices, read_mesh_bytes};
+use super::mesh_file::{MeshAttribute, MeshData, MeshFileError, check_indices, read_mesh_bytes};
 
 /// Most triangles in one mesh (as for OBJ meshes).
 pub const MAX_PLY_TRIANGLES: usize = super::obj::MAX_TRIANGLES;
@@ -43,16 +51,25 @@ fn number(p: &Property) -> Option<f64> {
     })
 }
 
-/// One vertex: the attributes read, by slot (x y z nx ny nz u v).
-struct Vertex([f32; 8]);
+/// One vertex: the geometry read, by slot (x y z nx ny nz u v), and the other scalar
+/// properties in the header's order (the attributes' columns).
+struct Vertex([f32; 8], Vec<f32>);
 
 impl PropertyAccess for Vertex {
     fn new() -> Self {
-        Vertex([0.0; 8])
+        Vertex([0.0; 8], Vec::new())
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        let Some(slot) = vertex_slot(name) else { return PropertyAccessResult::Ignored };
+        let Some(slot) = vertex_slot(name) else {
+            return match number(&property) {
+                Some(v) => {
+                    self.1.push(v as f32);
+                    PropertyAccessResult::Set
+                }
+                None => PropertyAccessResult::Ignored,
+            };
+        };
         match number(&property) {
             Some(v) => {
                 self.0[slot] = v as f32;
@@ -78,20 +95,33 @@ fn vertex_slot(name: &str) -> Option<usize> {
     })
 }
 
-/// One face: its corner indices, or why they are unusable.
+/// Whether a face property holds the corners.
+fn is_corner_list(name: &str) -> bool {
+    name == "vertex_indices" || name == "vertex_index"
+}
+
+/// One face: its corner indices, or why they are unusable, and its other scalar properties in
+/// the header's order.
 struct Face {
     corners: Vec<u32>,
     bad: bool,
+    extra: Vec<f32>,
 }
 
 impl PropertyAccess for Face {
     fn new() -> Self {
-        Face { corners: Vec::new(), bad: false }
+        Face { corners: Vec::new(), bad: false, extra: Vec::new() }
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        if name != "vertex_indices" && name != "vertex_index" {
-            return PropertyAccessResult::Ignored;
+        if !is_corner_list(name) {
+            return match number(&property) {
+                Some(v) => {
+                    self.extra.push(v as f32);
+                    PropertyAccessResult::Set
+                }
+                None => PropertyAccessResult::Ignored,
+            };
         }
         fn convert<T: TryInto<u32> + Copy>(list: &[T], out: &mut Vec<u32>) -> bool {
             out.clear();
@@ -120,6 +150,137 @@ impl PropertyAccess for Skip {
     fn new() -> Self {
         Skip
     }
+}
+
+/// An attribute found in a header: its name and the columns (indices among the element's
+/// other scalar properties, in the header's order) of its values.
+#[derive(Debug, PartialEq)]
+struct Layout {
+    name: String,
+    columns: Vec<usize>,
+}
+
+/// An attribute being read: its prefix, its suffix series, its columns so far.
+type Series<'n> = (&'n str, usize, Vec<usize>);
+
+/// The suffix series of an attribute's values: `SERIES[k][s]` is the `k`-th value's suffix of
+/// series `s` (`x y z`, `r g b`, `0 1 2`, `1 2 3`).
+const SERIES: [&[u8; 4]; 3] = [b"xr01", b"yg12", b"zb23"];
+
+/// The attributes of an element (Mitsuba's grouping, see the module's documentation): `kind` is
+/// `vertex_` or `face_`; `reserved` tells the properties read otherwise.
+fn attribute_layout(element: &ElementDef, kind: &str, reserved: &dyn Fn(&str) -> bool) -> Vec<Layout> {
+    let columns: Vec<&str> = element
+        .properties
+        .iter()
+        .filter(|(name, p)| matches!(p.data_type, PropertyType::Scalar(_)) && !reserved(name))
+        .map(|(name, _)| name.as_str())
+        .collect();
+    let column = |name: &str| columns.iter().position(|c| *c == name);
+    let mut out = Vec::new();
+    // The colour: `r g b` or `red green blue` (with an alpha it has four values, which Mitsuba
+    // cannot evaluate: left out).
+    let mut colour_names: Vec<&str> = vec!["r", "g", "b", "a"];
+    for names in [["r", "g", "b", "a"], ["red", "green", "blue", "alpha"]] {
+        let found: Vec<usize> = names[..3].iter().filter_map(|n| column(n)).collect();
+        if found.len() == 3 {
+            if column(names[3]).is_none() {
+                out.push(Layout { name: format!("{kind}color"), columns: found });
+            }
+            colour_names.extend(names);
+            break;
+        }
+    }
+    // `PREFIX_S` series.
+    let mut seen: Vec<&str> = Vec::new();
+    let mut current: Option<Series<'_>> = None;
+    /// The attribute being read, if it has one or three values.
+    fn flush<'n>(
+        current: &mut Option<Series<'n>>,
+        kind: &str,
+        out: &mut Vec<Layout>,
+        seen: &mut Vec<&'n str>,
+    ) {
+        if let Some((prefix, series, cols)) = current.take()
+            && (cols.len() == 1 || cols.len() == 3)
+        {
+            let suffix = if series == 1 { "_color" } else { "" };
+            out.push(Layout { name: format!("{kind}{prefix}{suffix}"), columns: cols });
+            seen.push(prefix);
+        }
+    }
+    let mut i = 0;
+    while i < columns.len() {
+        let name = columns[i];
+        i += 1;
+        if colour_names.contains(&name) {
+            continue;
+        }
+        let Some((prefix, suffix)) = name.rsplit_once('_') else {
+            flush(&mut current, kind, &mut out, &mut seen);
+            continue;
+        };
+        let &[letter] = suffix.as_bytes() else {
+            flush(&mut current, kind, &mut out, &mut seen);
+            continue;
+        };
+        if current.as_ref().is_some_and(|c| c.0 != prefix) {
+            flush(&mut current, kind, &mut out, &mut seen);
+        }
+        let skip_prefix = |i: &mut usize| {
+            while *i < columns.len() && columns[*i].starts_with(prefix) {
+                *i += 1;
+            }
+        };
+        match &mut current {
+            None => {
+                if seen.contains(&prefix) {
+                    skip_prefix(&mut i);
+                    continue;
+                }
+                if let Some(series) = SERIES[0].iter().position(|&c| c == letter) {
+                    current = Some((prefix, series, vec![i - 1]));
+                }
+            }
+            Some((_, series, cols)) => {
+                if cols.len() < SERIES.len() && SERIES[cols.len()][*series] == letter {
+                    cols.push(i - 1);
+                } else {
+                    // Out of series (or a fourth value): the attribute is dropped.
+                    current = None;
+                    skip_prefix(&mut i);
+                }
+            }
+        }
+    }
+    flush(&mut current, kind, &mut out, &mut seen);
+    out
+}
+
+/// The values of the attributes of `layouts` over elements whose other scalar properties are
+/// `rows`, each element's values repeated `repeat(element)` times (a polygon's triangles).
+fn attribute_values<'r>(
+    layouts: &[Layout],
+    kind_is_face: bool,
+    rows: impl Iterator<Item = (&'r [f32], usize)> + Clone,
+) -> Vec<MeshAttribute> {
+    layouts
+        .iter()
+        .map(|l| {
+            let mut values = Vec::new();
+            for (row, repeat) in rows.clone() {
+                for _ in 0..repeat {
+                    values.extend(l.columns.iter().map(|&c| row.get(c).copied().unwrap_or(0.0)));
+                }
+            }
+            MeshAttribute {
+                name: l.name.clone(),
+                per_face: kind_is_face,
+                components: l.columns.len(),
+                values,
+            }
+        })
+        .collect()
 }
 
 /// The fewest bytes one element of `properties` takes in `encoding`.
@@ -173,6 +334,13 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<MeshData, MeshFileError> {
     let has_normals = declared(&["nx", "ny", "nz"]);
     let uv_names = [["u", "v"], ["s", "t"], ["texture_u", "texture_v"], ["texture_s", "texture_t"]];
     let has_uvs = uv_names.iter().any(|pair| declared(pair));
+
+    let vertex_layout = attribute_layout(vertex_def, "vertex_", &|n| vertex_slot(n).is_some());
+    let face_layout = header
+        .elements
+        .get("face")
+        .map(|f| attribute_layout(f, "face_", &is_corner_list))
+        .unwrap_or_default();
 
     let mut vertices: Vec<Vertex> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
@@ -234,6 +402,13 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<MeshData, MeshFileError> {
             "data after the last element (the counts are wrong)",
         ));
     }
+    let mut attributes =
+        attribute_values(&vertex_layout, false, vertices.iter().map(|v| (v.1.as_slice(), 1)));
+    attributes.extend(attribute_values(
+        &face_layout,
+        true,
+        faces.iter().map(|f| (f.extra.as_slice(), f.corners.len().saturating_sub(2))),
+    ));
     let data = MeshData {
         name: None,
         positions: vertices.iter().map(|v| [v.0[0], v.0[1], v.0[2]]).collect(),
@@ -241,6 +416,7 @@ pub fn parse_ply(bytes: &[u8], file: &str) -> Result<MeshData, MeshFileError> {
         uvs: has_uvs.then(|| vertices.iter().map(|v| [v.0[6], v.0[7]]).collect()),
         triangles,
         face_normals: false,
+        attributes,
     };
     check_indices(&data, file)?;
     Ok(data)
@@ -314,6 +490,36 @@ property uchar red\nelement face 1\nproperty list uchar uint vertex_indices\nend
         let negative = ASCII.replacen("4 0 1 2 3", "4 0 1 2 -1", 1);
         assert_eq!(parse_ply(negative.as_bytes(), "q.ply").expect_err("negative").element, "face 0");
         assert_eq!(parse_ply(b"not a ply", "x.ply").expect_err("header").element, "header");
+    }
+
+    #[test]
+    fn other_properties_become_attributes_named_as_mitsuba_names_them() {
+        // Checked against Mitsuba 3.9.1's reading of the same file (`mi.traverse` of the mesh).
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nproperty float w_0\n\
+property float q_x\nproperty float q_y\nproperty float q_z\nproperty float two_0\nproperty float two_1\n\
+property float plain\nelement face 2\nproperty list uchar int vertex_indices\nproperty float k_r\n\
+property float k_g\nproperty float k_b\nend_header\n\
+0 0 0 255 128 0 0.5 1 2 3 0 0 7\n1 0 0 0 0 0 0.25 4 5 6 0 0 7\n0 1 0 10 20 30 0.125 7 8 9 0 0 7\n\
+3 0 1 2 0.1 0.2 0.3\n4 0 1 2 0 0.4 0.5 0.6\n";
+        let mesh = parse_ply(text.as_bytes(), "a.ply").expect("reads");
+        let find = |name: &str| mesh.attributes.iter().find(|a| a.name == name);
+        let names: Vec<&str> = mesh.attributes.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["vertex_color", "vertex_w", "vertex_q", "face_k_color"]);
+        let colour = find("vertex_color").expect("colour");
+        // 8-bit values as stored, as Mitsuba keeps them.
+        assert_eq!((colour.per_face, colour.components), (false, 3));
+        assert_eq!(colour.values, [255.0, 128.0, 0.0, 0.0, 0.0, 0.0, 10.0, 20.0, 30.0]);
+        assert_eq!(find("vertex_w").map(|a| a.rgb(2)), Some([0.125; 3]));
+        assert_eq!(find("vertex_q").map(|a| a.rgb(1)), Some([4.0, 5.0, 6.0]));
+        // The quad's two triangles both carry its values.
+        let face = find("face_k_color").expect("face colour");
+        assert!(face.per_face);
+        assert_eq!(mesh.triangles.len(), 3);
+        assert_eq!(
+            [face.rgb(0), face.rgb(1), face.rgb(2)],
+            [[0.1, 0.2, 0.3], [0.4, 0.5, 0.6], [0.4, 0.5, 0.6]]
+        );
     }
 
     mod no_panics {

@@ -152,7 +152,15 @@ pub fn parse_serialized(bytes: &[u8], file: &str, shape_index: u32) -> Result<Me
         stream.records::<3>(n, size, "colours")?;
     }
     let triangles = stream.indices(face_count as usize)?;
-    let data = MeshData { name, positions, normals, uvs, triangles, face_normals: flags & FACE_NORMALS != 0 };
+    let data = MeshData {
+        name,
+        positions,
+        normals,
+        uvs,
+        triangles,
+        face_normals: flags & FACE_NORMALS != 0,
+        attributes: Vec::new(),
+    };
     check_indices(&data, file)
         .map_err(|e| MeshFileError::new(file, format!("{mesh}, {}", e.element), e.message))?;
     Ok(data)

@@ -7,7 +7,8 @@
 //! - `area` on a sphere: a direction uniform in the cone the sphere fills (outside it), radiance
 //!   leaving outwards;
 //! - `point`, `spot` (Mitsuba's fall-off, linear in angle between `beam_width` and
-//!   `cutoff_angle`) and `directional`: delta lights;
+//!   `cutoff_angle`), `projector` (an image projected from a point, Mitsuba's normalisation) and
+//!   `directional`: delta lights;
 //! - `constant` and `envmap`: the environment, the map sampled texel by texel in proportion to
 //!   luminance times `sin theta` (the texel's solid angle), then uniformly inside the texel.
 //!
@@ -21,6 +22,7 @@ use glam::DVec3;
 use crate::base::sampling::{Discrete, sphere_cone, sphere_cone_pdf};
 use crate::geometry::{Bounds, MESH_ERROR_SCALE, Ray, SPAWN_OFFSET, Shape, TriangleMesh};
 use crate::light::Emitter;
+use crate::material::Param;
 use crate::prepare::{EnvironmentMap, PreparedScene, luminance};
 
 /// What next-event estimation drew: a direction to an emitter and what arrives along it.
@@ -53,6 +55,18 @@ enum AreaShape {
     Sphere { centre: DVec3, radius: f64 },
 }
 
+/// A projector's image plane: the tangent of half its horizontal field of view and the image's
+/// aspect (width over height).
+#[derive(Clone, Copy, Debug)]
+struct Projection {
+    tan_x: f64,
+    aspect: f64,
+}
+
+/// Points per side of the grid a textured projector's mean irradiance is estimated on (for
+/// its power).
+const PROJECTOR_MEAN_GRID: u32 = 16;
+
 /// The environment map's sampling distribution: rows by their weight, then texels in the row.
 #[derive(Debug)]
 struct MapDistribution {
@@ -68,6 +82,8 @@ pub struct Emitters<'s> {
     choose: Discrete,
     /// Per emitter: the shape of an area emitter.
     shapes: Vec<Option<AreaShape>>,
+    /// Per emitter: the image plane of a projector.
+    projections: Vec<Option<Projection>>,
     /// The environment emitter (`constant` or `envmap`), if any.
     environment: Option<u32>,
     /// The environment map and its distribution.
@@ -83,8 +99,20 @@ fn mean(c: DVec3) -> f64 {
 }
 
 impl<'s> Emitters<'s> {
-    /// The emitters of `scene`.
+    /// The emitters of `scene`, chosen in proportion to their estimated power.
     pub fn new(scene: &'s PreparedScene) -> Emitters<'s> {
+        Emitters::with_choice(scene, false)
+    }
+
+    /// The emitters of `scene`, each chosen with the same probability, as Mitsuba 3.9.1 chooses
+    /// them (every emitter's `sampling_weight` is 1 by default): the same expectation as
+    /// [`Emitters::new`], and Mitsuba's noise (which its `direct` integrator with emitter
+    /// samples alone shows plainly, on scenes of lights of very different powers).
+    pub fn uniform(scene: &'s PreparedScene) -> Emitters<'s> {
+        Emitters::with_choice(scene, true)
+    }
+
+    fn with_choice(scene: &'s PreparedScene, uniform: bool) -> Emitters<'s> {
         let s = &scene.scene;
         let mut b = Bounds::EMPTY.include(s.camera.eye);
         for p in &s.primitives {
@@ -97,6 +125,7 @@ impl<'s> Emitters<'s> {
         let mut environment = None;
         let mut map = None;
         let mut shapes = Vec::with_capacity(s.emitters.len());
+        let mut projections = vec![None; s.emitters.len()];
         let mut powers = Vec::with_capacity(s.emitters.len());
         for (i, e) in s.emitters.iter().enumerate() {
             let (shape, power) = match e {
@@ -123,6 +152,28 @@ impl<'s> Emitters<'s> {
                 Emitter::Spot { intensity, cos_cutoff, cos_beam, .. } => {
                     (None, TAU * (1.0 - 0.5 * (cos_cutoff + cos_beam)) * mean(*intensity))
                 }
+                Emitter::Projector { irradiance, scale, tan_half, fov_axis, .. } => {
+                    // Mitsuba's `resolution()`: the bitmap's, (1, 1) for anything else.
+                    let ((w, h), mean_e) = match irradiance {
+                        Param::Constant(c) => ((1, 1), mean(*c)),
+                        Param::Texture(t) => {
+                            let n = PROJECTOR_MEAN_GRID;
+                            let mut sum = 0.0;
+                            for j in 0..n {
+                                for i in 0..n {
+                                    let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                                    sum += mean(scene.texture_at(t, u, v));
+                                }
+                            }
+                            (scene.texture_resolution(t), sum / (n * n) as f64)
+                        }
+                    };
+                    let aspect = w as f64 / h.max(1) as f64;
+                    let tan_x = fov_axis.tan_half_x(*tan_half, aspect);
+                    projections[i] = Some(Projection { tan_x, aspect });
+                    // The flux through the image plane at distance 1: pi scale E over its area.
+                    (None, PI * scale.abs() * mean_e.max(0.0) * 4.0 * tan_x * tan_x / aspect)
+                }
                 Emitter::Directional { irradiance, .. } => (None, disc * mean(*irradiance)),
                 Emitter::Constant { radiance } => {
                     environment = Some(i as u32);
@@ -146,7 +197,10 @@ impl<'s> Emitters<'s> {
             shapes.push(shape);
             powers.push(power);
         }
-        Emitters { scene, choose: Discrete::new(&powers), shapes, environment, map, radius }
+        if uniform {
+            powers.iter_mut().for_each(|p| *p = 1.0);
+        }
+        Emitters { scene, choose: Discrete::new(&powers), shapes, projections, environment, map, radius }
     }
 
     /// Whether there is anything to sample.
@@ -292,6 +346,43 @@ impl<'s> Emitters<'s> {
                     margin: 0.0,
                 })
             }
+            Emitter::Projector { irradiance, scale, to_world, to_local, .. } => {
+                let Projection { tan_x, aspect } = self.projections[index]?;
+                // The image coordinates of `p` (Mitsuba's `camera_to_sample`): its local `+x`
+                // towards `u = 0`.
+                let q = to_local.transform_point3(p);
+                if q.z.is_nan() || q.z <= 0.0 {
+                    return None;
+                }
+                let u = 0.5 - 0.5 * q.x / (q.z * tan_x);
+                let v = 0.5 - 0.5 * aspect * q.y / (q.z * tan_x);
+                if !((0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v)) {
+                    return None;
+                }
+                let position = to_world.w_axis.truncate();
+                let to = position - p;
+                let dist = to.length();
+                if dist.is_nan() || dist <= 0.0 {
+                    return None;
+                }
+                let wi = to / dist;
+                let denominator = q.z * q.z * -to_world.transform_vector3(DVec3::Z).dot(wi);
+                if denominator.is_nan() || denominator <= 0.0 {
+                    return None;
+                }
+                let e = match irradiance {
+                    Param::Constant(c) => *c,
+                    Param::Texture(t) => self.scene.texture_at(t, u, v),
+                };
+                Some(EmitterSample {
+                    wi,
+                    target: position,
+                    radiance: e * (PI * scale / denominator),
+                    pdf: choice,
+                    delta: true,
+                    margin: 0.0,
+                })
+            }
             Emitter::Directional { direction, irradiance } => {
                 let wi = -*direction;
                 Some(EmitterSample {
@@ -385,5 +476,65 @@ impl MapDistribution {
             return 0.0;
         }
         self.rows.pmf(row) * self.columns[row].pmf(column) * (w as f64 * h as f64) / (2.0 * PI * PI * sin)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A projector at the origin looking along `+z` with a 90 degree field of view, irradiance
+    /// `e` and `scale` 2, in a scene with one small sphere far off (so that it is the only
+    /// emitter chosen).
+    fn scene(e: &str) -> PreparedScene {
+        let text = format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, -5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+<emitter type="projector"><float name="fov" value="90"/><float name="scale" value="2"/>{e}</emitter>
+<shape type="sphere"><float name="radius" value="0.1"/><point name="center" value="0, 0, 50"/></shape>
+</scene>"#
+        );
+        let doc =
+            crate::scene::mitsuba::read_source(crate::scene::SourceFile::from_text("t.xml", None, text), &[])
+                .expect("reads");
+        let built = crate::scene::mitsuba::build(&doc).expect("builds");
+        PreparedScene::new(built.scene, &Default::default()).expect("prepares")
+    }
+
+    #[test]
+    fn a_projector_gives_pi_scale_e_at_distance_one_and_follows_mitsubas_normalisation() {
+        let s = scene(r#"<rgb name="irradiance" value="1, 2, 3"/>"#);
+        let emitters = Emitters::new(&s);
+        // On the axis at distance 2: pi scale E / (z^2 cos) with z = 2, cos = 1.
+        let on_axis = emitters.sample(DVec3::new(0.0, 0.0, 2.0), 0.5, 0.5, 0.5).expect("lit");
+        assert!(on_axis.delta && (on_axis.pdf - 1.0).abs() < 1e-12);
+        assert!((on_axis.wi - -DVec3::Z).length() < 1e-12);
+        let expected = DVec3::new(1.0, 2.0, 3.0) * (2.0 * PI / 4.0);
+        assert!((on_axis.radiance - expected).length() < 1e-12, "{}", on_axis.radiance);
+        // Off the axis, on the plane z = 1: z^2 cos = cos, the irradiance on the plane
+        // (radiance times the cosine at the plane) is pi scale E everywhere.
+        let p = DVec3::new(0.6, -0.3, 1.0);
+        let off = emitters.sample(p, 0.5, 0.5, 0.5).expect("lit");
+        let cos = p.z / p.length();
+        assert!((off.radiance * cos - DVec3::new(1.0, 2.0, 3.0) * 2.0 * PI).length() < 1e-9);
+        // Outside the field of view, and behind: dark.
+        assert!(emitters.sample(DVec3::new(1.01, 0.0, 1.0), 0.5, 0.5, 0.5).is_none());
+        assert!(emitters.sample(DVec3::new(0.0, 0.0, -1.0), 0.5, 0.5, 0.5).is_none());
+    }
+
+    #[test]
+    fn a_projected_texture_is_read_at_mitsubas_image_coordinates() {
+        // A checkerboard of 2 x 2 squares: `color0` where u and v are both under 0.5 (and both
+        // over). Local `+x` is towards u = 0, `+y` towards v = 0.
+        let s = scene(
+            r#"<texture type="checkerboard" name="irradiance"><rgb name="color0" value="1"/><rgb name="color1" value="0"/></texture>"#,
+        );
+        let emitters = Emitters::new(&s);
+        let at = |x: f64, y: f64| emitters.sample(DVec3::new(x, y, 1.0), 0.5, 0.5, 0.5).map(|e| e.radiance.x);
+        assert!(at(0.5, 0.5).is_some_and(|r| r > 0.0), "u, v < 0.5");
+        assert!(at(-0.5, -0.5).is_some_and(|r| r > 0.0), "u, v > 0.5");
+        assert_eq!(at(0.5, -0.5), Some(0.0));
+        assert_eq!(at(-0.5, 0.5), Some(0.0));
     }
 }

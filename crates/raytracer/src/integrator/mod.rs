@@ -18,6 +18,7 @@ pub mod bsdf;
 pub mod bsdfs;
 pub mod classic;
 pub mod course_lobes;
+pub mod direct;
 pub mod emitters;
 pub mod lights;
 pub mod path;

@@ -20,6 +20,7 @@ use crate::base::sampler::{ExactSum, PixelRng, stream};
 use crate::camera::Camera;
 use crate::geometry::Ray;
 use crate::integrator::bsdf::{Bsdf, Transport, class, power_heuristic};
+use crate::integrator::direct::DirectTracer;
 use crate::integrator::lights::Lights;
 use crate::integrator::physical::PhysicalTracer;
 use crate::prepare::{Hit, Interaction, PreparedScene};
@@ -165,11 +166,17 @@ impl<'s> PathTracer<'s> {
 enum Tracer<'s> {
     Course(PathTracer<'s>),
     Physical(PhysicalTracer<'s>),
+    /// Mitsuba's `direct` integrator, where the scene asks for it.
+    Direct(DirectTracer<'s>),
 }
 
 impl<'s> Tracer<'s> {
     fn new(scene: &'s PreparedScene, max_depth: u32) -> Tracer<'s> {
-        if scene.is_physical() {
+        if scene.is_physical()
+            && let Some(samples) = scene.scene.render.direct
+        {
+            Tracer::Direct(DirectTracer::new(scene, samples))
+        } else if scene.is_physical() {
             Tracer::Physical(PhysicalTracer::new(scene, max_depth))
         } else {
             Tracer::Course(PathTracer::new(scene, max_depth))
@@ -181,6 +188,7 @@ impl<'s> Tracer<'s> {
         match self {
             Tracer::Course(t) => t.radiance(ray, rng),
             Tracer::Physical(t) => t.radiance(ray, rng),
+            Tracer::Direct(t) => t.radiance(ray, rng),
         }
     }
 }

@@ -25,7 +25,7 @@ const RR_MAX_SURVIVAL: f64 = 0.95;
 /// (not turned towards the viewer), or as a `normalmap` / `bumpmap` perturbs it, `t` and `b`
 /// tangents.
 #[derive(Clone, Copy, Debug)]
-struct Frame {
+pub(super) struct Frame {
     t: DVec3,
     b: DVec3,
     n: DVec3,
@@ -34,7 +34,7 @@ struct Frame {
 }
 
 impl Frame {
-    fn at(scene: &PreparedScene, at: &Interaction) -> Frame {
+    pub(super) fn at(scene: &PreparedScene, at: &Interaction) -> Frame {
         let (t, b, n) = scene.shading_frame(at);
         match scene.perturbed_frame(at, (t, b, n)) {
             Some((t2, b2, n2)) => Frame { t: t2, b: b2, n: n2, base: Some(n) },
@@ -45,7 +45,7 @@ impl Frame {
     /// Whether the world direction `w` towards a light is on the same side of the perturbed and
     /// of the unperturbed normal (Mitsuba's `normalmap` and `bumpmap` scatter nothing else).
     #[inline]
-    fn admits(self, w: DVec3) -> bool {
+    pub(super) fn admits(self, w: DVec3) -> bool {
         match self.base {
             Some(n0) => n0.dot(w) * self.n.dot(w) > 0.0,
             None => true,
@@ -53,12 +53,12 @@ impl Frame {
     }
 
     #[inline]
-    fn to_local(self, v: DVec3) -> DVec3 {
+    pub(super) fn to_local(self, v: DVec3) -> DVec3 {
         DVec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
     }
 
     #[inline]
-    fn to_world(self, v: DVec3) -> DVec3 {
+    pub(super) fn to_world(self, v: DVec3) -> DVec3 {
         self.t * v.x + self.b * v.y + self.n * v.z
     }
 }

@@ -14,7 +14,7 @@ mod triangles;
 
 pub use interaction::Interaction;
 use load::{load_meshes, load_textures};
-pub use physical::{EnvironmentMap, luminance};
+pub use physical::{EnvironmentMap, luminance, sphere_local, sphere_world};
 use physical::{Physical, load_physical};
 use queries::FlatSet;
 pub use search::{Located, TextureSearch};

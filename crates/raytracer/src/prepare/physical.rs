@@ -92,11 +92,15 @@ fn bitmap_specs(scene: &Scene) -> Vec<&Arc<TextureSpec>> {
     let mut seen = HashMap::new();
     let mut out = Vec::new();
     for e in &scene.emitters {
-        if let Emitter::Spot { texture: Some(t), .. } = e
-            && matches!(**t, TextureSpec::Bitmap { .. })
-            && seen.insert(Arc::as_ptr(t) as usize, ()).is_none()
+        let texture = match e {
+            Emitter::Spot { texture: Some(t), .. } => t,
+            Emitter::Projector { irradiance: Param::Texture(t), .. } => t,
+            _ => continue,
+        };
+        if matches!(**texture, TextureSpec::Bitmap { .. })
+            && seen.insert(Arc::as_ptr(texture) as usize, ()).is_none()
         {
-            out.push(t);
+            out.push(texture);
         }
     }
     for p in &scene.primitives {
@@ -152,7 +156,7 @@ pub(super) fn load_physical(
                     .map(|b| (Arc::as_ptr(t) as usize, b))
                     .map_err(|e| bitmap_error(location, e)),
             ),
-            TextureSpec::Checkerboard { .. } => None,
+            TextureSpec::Checkerboard { .. } | TextureSpec::MeshAttribute { .. } => None,
         })
         .collect();
     for t in &specs {
@@ -211,13 +215,15 @@ impl PreparedScene {
     }
 
     /// Mitsuba's texture coordinates at an interaction: a mesh's `(u, v)` as its file gives them
-    /// (the barycentric weights without), a sphere's `(phi / 2 pi, theta / pi)` about `+z`.
+    /// (the barycentric weights without), a sphere's `(phi / 2 pi, theta / pi)` in its own frame
+    /// (`to_world`'s rotation: the pole its local `+z`, `phi = 0` its local `+x`; see
+    /// [`sphere_local`]).
     #[inline]
     pub fn surface_uv(&self, at: &Interaction) -> (f64, f64) {
         let shape = &self.scene.primitives[at.primitive as usize].shape;
         match (shape, at.part) {
             (Shape::Sphere(s), _) => {
-                let d = (at.point - s.centre) / s.radius;
+                let d = sphere_local(s, (at.point - s.centre) / s.radius);
                 let phi = d.y.atan2(d.x) / TAU;
                 (phi - phi.floor(), d.z.clamp(-1.0, 1.0).acos() / PI)
             }
@@ -239,7 +245,10 @@ impl PreparedScene {
         let shape = &self.scene.primitives[at.primitive as usize].shape;
         let dpdu = match (shape, at.part) {
             (Shape::Mesh(m), ShapePart::Triangle { index, .. }) => m.dp_ds(index),
-            (Shape::Sphere(s), _) => Some(DVec3::new(s.centre.y - at.point.y, at.point.x - s.centre.x, 0.0)),
+            (Shape::Sphere(s), _) => {
+                let d = sphere_local(s, at.point - s.centre);
+                Some(sphere_world(s, DVec3::new(-d.y, d.x, 0.0)))
+            }
             _ => None,
         };
         let outward = if at.front { at.geometric } else { -at.geometric };
@@ -256,7 +265,7 @@ impl PreparedScene {
         match (shape, at.part) {
             (Shape::Mesh(m), ShapePart::Triangle { index, .. }) => m.dp_dst(index),
             (Shape::Sphere(s), _) => {
-                let d = at.point - s.centre;
+                let d = sphere_local(s, at.point - s.centre);
                 let rho = d.x.hypot(d.y);
                 let dpdu = DVec3::new(-d.y, d.x, 0.0) * TAU;
                 let dpdv = if rho > 0.0 {
@@ -264,7 +273,7 @@ impl PreparedScene {
                 } else {
                     DVec3::new(d.z, 0.0, 0.0) * PI
                 };
-                Some((dpdu, dpdv))
+                Some((sphere_world(s, dpdu), sphere_world(s, dpdv)))
             }
             _ => None,
         }
@@ -334,6 +343,15 @@ impl PreparedScene {
         (w * (m.x_axis.x * gx + m.x_axis.y * gy), h * (m.y_axis.x * gx + m.y_axis.y * gy))
     }
 
+    /// A texture's resolution as Mitsuba's `resolution()` gives it: a loaded bitmap's width and
+    /// height, `(1, 1)` for any other texture (and for a bitmap the scene did not load).
+    pub fn texture_resolution(&self, spec: &Arc<TextureSpec>) -> (u32, u32) {
+        match self.physical.bitmaps.get(&(Arc::as_ptr(spec) as usize)) {
+            Some(b) => (b.width(), b.height()),
+            None => (1, 1),
+        }
+    }
+
     /// A colour parameter at an interaction.
     #[inline]
     pub fn param(&self, param: &Param, at: &Interaction) -> DVec3 {
@@ -344,12 +362,27 @@ impl PreparedScene {
     }
 
     fn texture_value(&self, spec: &Arc<TextureSpec>, at: &Interaction) -> DVec3 {
+        if let TextureSpec::MeshAttribute { name, scale, .. } = &**spec {
+            return self.mesh_attribute(name, at) * *scale;
+        }
         let (u, v) = self.surface_uv(at);
         self.texture_at(spec, u, v)
     }
 
+    /// The mesh attribute `name` at an interaction: interpolated or per face as
+    /// [`crate::geometry::TriangleMesh::attribute_value`]; black off a mesh that has it.
+    fn mesh_attribute(&self, name: &str, at: &Interaction) -> DVec3 {
+        let shape = &self.scene.primitives[at.primitive as usize].shape;
+        match (shape, at.part) {
+            (Shape::Mesh(m), ShapePart::Triangle { index, b1, b2 }) => {
+                m.attribute(name).map_or(DVec3::ZERO, |a| m.attribute_value(a, index, b1, b2))
+            }
+            _ => DVec3::ZERO,
+        }
+    }
+
     /// A texture's value at texture coordinates `(u, v)` (before its `to_uv`); black for a
-    /// bitmap the scene did not load.
+    /// bitmap the scene did not load and for a mesh attribute (which needs a surface point).
     pub fn texture_at(&self, spec: &Arc<TextureSpec>, u: f64, v: f64) -> DVec3 {
         match &**spec {
             TextureSpec::Bitmap { nearest, wrap, to_uv, .. } => {
@@ -364,8 +397,26 @@ impl PreparedScene {
                 let (a, b) = (p.x - p.x.floor() > 0.5, p.y - p.y.floor() > 0.5);
                 if a == b { *color0 } else { *color1 }
             }
+            TextureSpec::MeshAttribute { .. } => DVec3::ZERO,
         }
     }
+}
+
+/// A world vector in a sphere's own frame, Mitsuba's `to_object` rotation: `z` along its
+/// [`Sphere::pole`](crate::geometry::Sphere::pole), `y` along its
+/// [`Sphere::seam`](crate::geometry::Sphere::seam), `x = y x z` (the Mitsuba builder sets them to
+/// `to_world`'s local `+z` and `+y`; the default frame, `+z` and `+y`, is the world's).
+#[inline]
+pub fn sphere_local(s: &crate::geometry::Sphere, v: DVec3) -> DVec3 {
+    let (z, y) = (s.pole(), s.seam());
+    DVec3::new(v.dot(y.cross(z)), v.dot(y), v.dot(z))
+}
+
+/// A vector of a sphere's own frame in the world (the inverse of [`sphere_local`]).
+#[inline]
+pub fn sphere_world(s: &crate::geometry::Sphere, v: DVec3) -> DVec3 {
+    let (z, y) = (s.pole(), s.seam());
+    y.cross(z) * v.x + y * v.y + z * v.z
 }
 
 /// The luminance of a linear sRGB colour (Rec. 709 weights, as Mitsuba's `luminance`).

@@ -110,7 +110,7 @@ mod tests {
                 triangles.push(TriangleIndices::positions([id(i, j), id(i + 1, j + 1), id(i, j + 1)]));
             }
         }
-        let vertices = Arc::new(MeshVertices { positions, normals: Vec::new(), uvs: Vec::new() });
+        let vertices = Arc::new(MeshVertices { positions, ..MeshVertices::default() });
         Primitive {
             shape: Shape::Mesh(Arc::new(TriangleMesh::new(vertices, &triangles))),
             material: Arc::new(Material::Diffuse { reflectance: Param::scalar(0.5) }),

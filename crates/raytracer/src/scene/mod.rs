@@ -64,6 +64,20 @@ pub struct SceneRender {
     /// Whether 8-bit output is sRGB-encoded by default (Mitsuba's convention); course files
     /// write their values as they are unless `--gamma` is given.
     pub srgb_output: bool,
+    /// Mitsuba's `direct` integrator (direct lighting only, with its sample counts) instead of
+    /// the path tracer, when the file asks for it.
+    pub direct: Option<DirectSamples>,
+}
+
+/// The sample counts of Mitsuba's `direct` integrator: at each surface seen from the camera,
+/// `emitter_samples` emitter samples and `bsdf_samples` BSDF samples (at least one in all),
+/// weighted by Mitsuba's power heuristic over both counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DirectSamples {
+    /// Emitter samples (`emitter_samples`, default `shading_samples`, 1).
+    pub emitter_samples: u32,
+    /// BSDF samples (`bsdf_samples`, default `shading_samples`, 1).
+    pub bsdf_samples: u32,
 }
 
 impl Default for SceneRender {
@@ -75,6 +89,7 @@ impl Default for SceneRender {
             hide_emitters: false,
             filter: PixelFilter::Box,
             srgb_output: false,
+            direct: None,
         }
     }
 }
@@ -173,6 +188,10 @@ pub struct CameraSettings {
     /// from the plane through `eye` at right angles to it, and `lens_width` x `lens_height`
     /// is the size of the visible rectangle in scene units. Course cameras are perspective.
     pub orthographic: bool,
+    /// Where the image's centre lies on the image plane, off the view direction: `(right, up)`
+    /// in the plane's units (those of `lens_width` and `lens_height`; 0 for a centred image,
+    /// the course's). A Mitsuba film's crop window renders a part of its film this way.
+    pub window_offset: (f64, f64),
 }
 
 /// The light-transport model named by the camera key `algorithm=` (students' renderers of the
@@ -233,6 +252,7 @@ impl Default for CameraSettings {
             algorithm: None,
             up: None,
             orthographic: false,
+            window_offset: (0.0, 0.0),
         }
     }
 }

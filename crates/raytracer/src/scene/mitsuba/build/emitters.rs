@@ -1,11 +1,12 @@
-//! `<emitter>` plugins outside shapes: `point`, `spot`, `directional`, `constant`, `envmap`.
+//! `<emitter>` plugins outside shapes: `point`, `spot`, `projector`, `directional`, `constant`,
+//! `envmap`.
 
 use glam::{DMat3, DVec3, DVec4};
 
 use super::super::{Plugin, PluginKind};
 use super::{Builder, Props};
-use crate::light::Emitter;
-use crate::material::Param;
+use crate::light::{Emitter, FovAxis};
+use crate::material::{Param, TextureSpec};
 use crate::scene::Diagnostic;
 
 impl<'a> Builder<'a> {
@@ -32,6 +33,12 @@ impl<'a> Builder<'a> {
                 let texture = match props.named_child("texture") {
                     None => None,
                     Some(t) if t.kind == PluginKind::Texture => match self.texture(t)? {
+                        Param::Texture(spec) if matches!(*spec, TextureSpec::MeshAttribute { .. }) => {
+                            return Err(props.error_at(
+                                t.pos,
+                                "the spot's `texture` cannot be a `mesh_attribute` (it has no mesh)",
+                            ));
+                        }
                         Param::Texture(spec) => Some(spec),
                         Param::Constant(_) => {
                             return Err(props.error_at(
@@ -59,6 +66,37 @@ impl<'a> Builder<'a> {
                     cos_cutoff: cutoff.to_radians().cos(),
                     texture,
                     to_local: linear.inverse(),
+                }
+            }
+            "projector" => {
+                let to_world = props.transform("to_world")?;
+                if DMat3::from_mat4(to_world).determinant().abs() < 1e-300 || !to_world.is_finite() {
+                    return Err(props.error("the projector's `to_world` is singular"));
+                }
+                let irradiance =
+                    match props.get("irradiance").is_some() || props.named_child("irradiance").is_some() {
+                        true => self.param(&props, "irradiance", 1.0)?,
+                        false => {
+                            return Err(props.error(
+                            "a `projector` needs an `irradiance` (a colour, or a texture such as a `bitmap`)",
+                        ));
+                        }
+                    };
+                if let crate::material::Param::Texture(t) = &irradiance
+                    && matches!(**t, TextureSpec::MeshAttribute { .. })
+                {
+                    return Err(props.error(
+                        "the projector's `irradiance` cannot be a `mesh_attribute` (it has no mesh)",
+                    ));
+                }
+                let (tan_half, fov_axis) = fov(&props)?;
+                Emitter::Projector {
+                    irradiance,
+                    scale: props.float("scale", 1.0)?,
+                    tan_half,
+                    fov_axis,
+                    to_world,
+                    to_local: to_world.inverse(),
                 }
             }
             "directional" => {
@@ -119,4 +157,29 @@ impl<'a> Builder<'a> {
         self.push_emitter(emitter);
         Ok(())
     }
+}
+
+/// A perspective device's field of view as Mitsuba's `parse_fov` reads it: `fov` (degrees,
+/// between 0 and 180) along `fov_axis` (`x`), or `focal_length` (`50mm`) on 35 mm film along
+/// the diagonal, not both. Returns the tangent of the half-angle and its axis.
+fn fov(props: &Props<'_>) -> Result<(f64, FovAxis), Diagnostic> {
+    if props.get("fov").is_some() {
+        if props.get("focal_length").is_some() {
+            return Err(props.error("give `fov` or `focal_length`, not both"));
+        }
+        let fov = props.float("fov", 0.0)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(props.error("`fov` must be an angle between 0 and 180 degrees"));
+        }
+        let axis = props.choice("fov_axis", &FovAxis::NAMES, "x")?;
+        return Ok(((fov.to_radians() / 2.0).tan(), FovAxis::parse(axis).unwrap_or(FovAxis::X)));
+    }
+    let (mm, pos) = props.string("focal_length")?.unwrap_or(("50mm", props.plugin.pos));
+    let f: f64 = mm.trim_end_matches("mm").parse().unwrap_or(f64::NAN);
+    if !(f > 0.0 && f.is_finite()) {
+        let text = crate::base::diagnostic::clip(mm);
+        return Err(props.error_at(pos, format!("`focal_length` must be like `50mm`, not `{text}`")));
+    }
+    props.ignore("fov_axis");
+    Ok((36f64.hypot(24.0) / 2.0 / f, FovAxis::Diagonal))
 }

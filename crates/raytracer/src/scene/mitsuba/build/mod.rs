@@ -26,7 +26,7 @@ use std::sync::Arc;
 use super::{Document, Plugin, PluginKind};
 use crate::light::Emitter;
 use crate::material::{Material, Param, TextureSpec};
-use crate::scene::{Background, CameraSettings, Diagnostic, Scene, SceneRender, Severity};
+use crate::scene::{Background, CameraSettings, Diagnostic, DirectSamples, Scene, SceneRender, Severity};
 pub use ior::{METALS, NAMED_IORS, metal_ior, named_ior};
 use props::Props;
 
@@ -105,6 +105,9 @@ pub fn build(doc: &Document) -> Result<Built, Vec<Diagnostic>> {
     }
     Ok(Built { scene: b.scene, diagnostics: b.diagnostics, inputs: b.inputs })
 }
+
+/// Most samples of each strategy of the `direct` integrator.
+pub const MAX_DIRECT_SAMPLES: u32 = 1 << 16;
 
 /// The state of a build.
 struct Builder<'a> {
@@ -185,16 +188,33 @@ impl<'a> Builder<'a> {
         match props.type_name() {
             "path" => self.path_settings(&props)?,
             "direct" => {
-                // One bounce: the path tracer at depth 2 has the same expectation.
-                props.ignore("emitter_samples");
-                props.ignore("bsdf_samples");
+                let count = |name: &str, default: i64| -> Result<u32, Diagnostic> {
+                    let n = props.integer(name, default)?;
+                    u32::try_from(n).ok().filter(|&n| n <= MAX_DIRECT_SAMPLES).ok_or_else(|| {
+                        props.error(format!("`{name}` must be from 0 to {MAX_DIRECT_SAMPLES}, not {n}"))
+                    })
+                };
+                let shading = props.get("shading_samples").is_some();
+                if shading && (props.get("emitter_samples").is_some() || props.get("bsdf_samples").is_some())
+                {
+                    return Err(props.error(
+                        "give `shading_samples` or `emitter_samples` and `bsdf_samples`, not both (as Mitsuba)",
+                    ));
+                }
+                let both = count("shading_samples", 1)?;
+                let samples = DirectSamples {
+                    emitter_samples: count("emitter_samples", both as i64)?,
+                    bsdf_samples: count("bsdf_samples", both as i64)?,
+                };
+                if samples.emitter_samples + samples.bsdf_samples == 0 {
+                    return Err(
+                        props.error("the `direct` integrator needs at least one emitter or BSDF sample")
+                    );
+                }
+                self.scene.render.direct = Some(samples);
+                // Direct lighting: paths of two segments.
                 self.scene.render.max_depth = Some(2);
                 self.scene.render.hide_emitters = props.boolean("hide_emitters", false)?;
-                self.note(
-                    &props,
-                    "the `direct` integrator is rendered as the path tracer with max_depth 2 (the same \
-                     picture in expectation; `emitter_samples` and `bsdf_samples` change only its noise)",
-                );
             }
             "aov" | "moment" => {
                 let nested = props.children(PluginKind::Integrator);

@@ -38,9 +38,9 @@ impl<'a> Builder<'a> {
             }
         };
         // The film first: the field of view depends on its aspect ratio.
-        let (width, height) = match props.children(PluginKind::Film).first() {
+        let (width, height, crop) = match props.children(PluginKind::Film).first() {
             Some((_, film)) => self.film(film)?,
-            None => (DEFAULT_FILM.0 as u32, DEFAULT_FILM.1 as u32),
+            None => (DEFAULT_FILM.0 as u32, DEFAULT_FILM.1 as u32, None),
         };
         let samples = match props.children(PluginKind::Sampler).first() {
             Some((_, sampler)) => {
@@ -97,6 +97,7 @@ impl<'a> Builder<'a> {
             cam.image_width = width;
             cam.image_height = height;
             cam.orthographic = true;
+            crop_window(cam, crop);
             self.finish(&props);
             return Ok(());
         }
@@ -147,6 +148,7 @@ impl<'a> Builder<'a> {
         cam.lens_height = 2.0 * half_h;
         cam.image_width = width;
         cam.image_height = height;
+        crop_window(cam, crop);
         if thin_lens {
             cam.aperture = props.float("aperture_radius", 0.0)?.max(0.0);
             cam.focal_distance = Some(props.positive("focus_distance", 1.0)?);
@@ -168,8 +170,9 @@ impl<'a> Builder<'a> {
         Ok(())
     }
 
-    /// The film's size, and its reconstruction filter into the render settings.
-    fn film(&mut self, plugin: &'a Plugin) -> Result<(u32, u32), Diagnostic> {
+    /// The film's size and crop window (`[x, y, width, height]` in pixels, when it is not the
+    /// whole film), and its reconstruction filter into the render settings.
+    fn film(&mut self, plugin: &'a Plugin) -> Result<(u32, u32, Option<[u32; 4]>), Diagnostic> {
         let props = Props::new(self.doc, plugin);
         if !matches!(props.type_name(), "hdrfilm" | "specfilm") {
             self.warn(&props, "it is read as an `hdrfilm`");
@@ -181,13 +184,24 @@ impl<'a> Builder<'a> {
             _ => return Err(props.error(format!("the film size {w}x{h} is not a size"))),
         };
         check_image_size(w, h).map_err(|m| props.error(m))?;
-        if props.plugin.property("crop_width").is_some() || props.plugin.property("crop_offset_x").is_some() {
-            self.diagnostics
-                .push(props.warning("the film's crop window is not supported: the whole film is rendered"));
-            for c in ["crop_width", "crop_height", "crop_offset_x", "crop_offset_y"] {
-                props.ignore(c);
-            }
+        // The crop window (Mitsuba's defaults: the whole film).
+        let crop_value = |name: &str, default: u32| -> Result<u32, Diagnostic> {
+            let v = props.integer(name, default as i64)?;
+            u32::try_from(v).map_err(|_| props.error(format!("`{name}` must be 0 or more, not {v}")))
+        };
+        let crop = [
+            crop_value("crop_offset_x", 0)?,
+            crop_value("crop_offset_y", 0)?,
+            crop_value("crop_width", w)?,
+            crop_value("crop_height", h)?,
+        ];
+        let [x, y, cw, ch] = crop.map(u64::from);
+        if cw == 0 || ch == 0 || x + cw > u64::from(w) || y + ch > u64::from(h) {
+            return Err(props.error(format!(
+                "the crop window ({cw}x{ch} at {x}, {y}) must be a non-empty part of the {w}x{h} film"
+            )));
         }
+        let crop = (crop != [0, 0, w, h]).then_some(crop);
         for ignored in [
             "pixel_format",
             "component_format",
@@ -218,6 +232,21 @@ impl<'a> Builder<'a> {
             }
         };
         self.finish(&props);
-        Ok((w, h))
+        Ok((w, h, crop))
     }
+}
+
+/// Narrows `cam` (set up for the whole film) to the crop window `[x, y, width, height]` (pixels
+/// of the film, `y` down): the image becomes the window's size and shows the part of the image
+/// plane the window covers, as Mitsuba's film renders only its crop window.
+fn crop_window(cam: &mut crate::scene::CameraSettings, crop: Option<[u32; 4]>) {
+    let Some([x, y, cw, ch]) = crop else { return };
+    let (w, h) = (f64::from(cam.image_width), f64::from(cam.image_height));
+    let (x, y, cw, ch) = (f64::from(x), f64::from(y), f64::from(cw), f64::from(ch));
+    cam.window_offset =
+        (((x + cw / 2.0) / w - 0.5) * cam.lens_width, (0.5 - (y + ch / 2.0) / h) * cam.lens_height);
+    cam.lens_width *= cw / w;
+    cam.lens_height *= ch / h;
+    cam.image_width = cw as u32;
+    cam.image_height = ch as u32;
 }

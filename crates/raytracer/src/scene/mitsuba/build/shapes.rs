@@ -11,6 +11,7 @@ use glam::{DMat3, DMat4, DVec3};
 
 use super::super::{Plugin, PluginKind};
 use super::{Builder, Props};
+use crate::base::diagnostic::clip;
 use crate::geometry::mesh::smooth_normals;
 use crate::geometry::mesh_file::MeshData;
 use crate::geometry::obj::load_obj;
@@ -18,7 +19,8 @@ use crate::geometry::ply::read_ply;
 use crate::geometry::serialized::read_serialized;
 use crate::geometry::{MeshTransform, MeshVertices, Shape, Sphere, TriangleIndices, TriangleMesh};
 use crate::light::Emitter;
-use crate::scene::{Diagnostic, Primitive};
+use crate::material::{Material, Param, TextureSpec};
+use crate::scene::{Diagnostic, Primitive, Severity};
 
 /// Segments around the circle of a `disk` or `cylinder`: the area of the polygon is within
 /// 2.6e-5 of the circle's.
@@ -52,6 +54,7 @@ impl<'a> Builder<'a> {
             return Ok(());
         };
         let material = self.shape_material(&props)?;
+        check_mesh_attributes(&props, &shape, &material)?;
         let index = self.scene.primitives.len() as u32;
         self.scene.primitives.push(Primitive { shape, material });
         for (_, emitter) in props.children(PluginKind::Emitter) {
@@ -165,8 +168,14 @@ impl<'a> Builder<'a> {
                 if !uniform || !orthogonal {
                     return Err(props.error("a sphere's `to_world` must scale it alike along every axis"));
                 }
-                let sphere = Sphere::new(to_world.transform_point3(centre), radius * scales[0])
-                    .map_err(|e| props.error(e.to_string()))?;
+                // Its frame (for its texture coordinates): `to_world`'s local `+z` and `+y`.
+                let sphere = Sphere::with_frame(
+                    to_world.transform_point3(centre),
+                    radius * scales[0],
+                    linear.z_axis / scales[2],
+                    linear.y_axis / scales[1],
+                )
+                .map_err(|e| props.error(e.to_string()))?;
                 self.finish(props);
                 return Ok(Some(Shape::Sphere(sphere)));
             }
@@ -231,6 +240,40 @@ impl<'a> Builder<'a> {
     }
 }
 
+/// Refuses a `mesh_attribute` texture of `material` that `shape` lacks (Mitsuba's "Invalid
+/// attribute requested" when it renders), at the texture, naming the shape's file and line and
+/// the attributes it has.
+fn check_mesh_attributes(props: &Props<'_>, shape: &Shape, material: &Material) -> Result<(), Diagnostic> {
+    for param in material.params() {
+        let Param::Texture(t) = param else { continue };
+        let TextureSpec::MeshAttribute { name, location, .. } = &**t else { continue };
+        let mesh = match shape {
+            Shape::Mesh(m) => Some(m),
+            _ => None,
+        };
+        if mesh.is_some_and(|m| m.attribute(name).is_some()) {
+            continue;
+        }
+        let at = props.error("").location.map_or(String::new(), |l| format!("{}:{}", l.file, l.span.line));
+        let what = match props.string("filename")? {
+            Some((file, _)) => format!("the mesh `{}` of the shape at {at}", clip(file)),
+            None => format!("the `{}` shape at {at}", props.type_name()),
+        };
+        let has: Vec<String> = mesh
+            .map(|m| m.vertices().attributes.iter().map(|a| format!("`{}`", a.name)).collect())
+            .unwrap_or_default();
+        let has =
+            if has.is_empty() { "it has none".to_owned() } else { format!("it has {}", has.join(", ")) };
+        return Err(Diagnostic {
+            severity: Severity::Error,
+            message: format!("{what} has no mesh attribute `{}`: {has}", clip(name)),
+            location: Some(location.clone()),
+            notes: Vec::new(),
+        });
+    }
+    Ok(())
+}
+
 /// A mesh in its own coordinates: vertices and indexed triangles.
 struct Indexed {
     vertices: MeshVertices,
@@ -258,7 +301,12 @@ impl Indexed {
             })
             .collect();
         Indexed {
-            vertices: MeshVertices { positions: data.positions, normals, uvs: data.uvs.unwrap_or_default() },
+            vertices: MeshVertices {
+                positions: data.positions,
+                normals,
+                uvs: data.uvs.unwrap_or_default(),
+                attributes: data.attributes,
+            },
             triangles,
         }
     }
@@ -321,13 +369,14 @@ impl Indexed {
     }
 
     /// Mitsuba's `disk`: the unit disk in the plane `z = 0`, facing `+z`, as a fan of
-    /// [`CIRCLE_SEGMENTS`] triangles; texture coordinates polar (`u` the radius, `v` the angle
-    /// over a turn).
+    /// [`CIRCLE_SEGMENTS`] triangles; texture coordinates polar, as Mitsuba's: `u` the radius,
+    /// `v` the angle over a turn from `+x`. The centre has one texture coordinate per triangle
+    /// (`v` the triangle's middle angle), so that `v` stays the angle towards the centre (within
+    /// half a segment, 1/1024 of a turn) rather than running to 0 there.
     fn disk() -> Indexed {
         let mut v = MeshVertices::default();
         v.positions.push([0.0; 3]);
         v.normals.push([0.0, 0.0, 1.0]);
-        v.uvs.push([0.0, 0.0]);
         let n = CIRCLE_SEGMENTS;
         for i in 0..=n {
             let phi = TAU * i as f64 / n as f64;
@@ -335,10 +384,14 @@ impl Indexed {
             v.normals.push([0.0, 0.0, 1.0]);
             v.uvs.push([1.0, (i as f64 / n as f64) as f32]);
         }
-        let triangles = (1..=n)
+        // The centre's texture coordinates, one per triangle, after the rim's n + 1.
+        for i in 0..n {
+            v.uvs.push([0.0, ((i as f64 + 0.5) / n as f64) as f32]);
+        }
+        let triangles = (0..n)
             .map(|i| {
-                let t = [0, i, i + 1];
-                TriangleIndices { position: t, normal: t, uv: t }
+                let t = [0, i + 1, i + 2];
+                TriangleIndices { position: t, normal: t, uv: [n + 1 + i, i, i + 1] }
             })
             .collect();
         Indexed { vertices: v, triangles }

@@ -375,3 +375,235 @@ fn a_textured_area_emitter_is_a_warning() {
         .collect();
     assert!(warnings.iter().any(|w| w.contains("`checkerboard`") && w.contains("radiance")), "{warnings:?}");
 }
+
+/// A triangle whose corners are red, green and blue (`vertex_color`) and whose face is grey
+/// (`face_color`), as a PLY file in a temporary folder with `scene` (its `{MESH}` replaced by
+/// the mesh's name) beside it; the scene read.
+fn with_coloured_triangle(
+    scene: &str,
+) -> (tempfile::TempDir, Result<super::Built, Vec<crate::scene::Diagnostic>>) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+property float color_0\nproperty float color_1\nproperty float color_2\nelement face 1\n\
+property list uchar int vertex_indices\nproperty float color_0\nproperty float color_1\nproperty float color_2\n\
+end_header\n0 0 0 1 0 0\n1 0 0 0 1 0\n0 1 0 0 0 1\n3 0 1 2 0.5 0.5 0.5\n";
+    std::fs::write(dir.path().join("tri.ply"), ply).expect("write the mesh");
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, scene.replace("{MESH}", "tri.ply")).expect("write the scene");
+    let doc = crate::scene::mitsuba::read_file(&path, &[]).expect("reads");
+    (dir, build(&doc))
+}
+
+fn mesh_attribute_scene(name: &str, shape: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">{SENSOR}
+<shape type="{shape}"><string name="filename" value="{{MESH}}"/>
+    <bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance">
+        <string name="name" value="{name}"/><float name="scale" value="0.5"/></texture></bsdf>
+</shape></scene>"#
+    )
+}
+
+#[test]
+fn a_mesh_attribute_reads_the_vertex_and_face_values_of_its_mesh() {
+    for (name, b1, b2, expected) in [
+        // Barycentric over the corners' colours.
+        ("vertex_color", 0.25f32, 0.5f32, DVec3::new(0.25, 0.25, 0.5)),
+        // Constant over the face.
+        ("face_color", 0.25, 0.5, DVec3::splat(0.5)),
+    ] {
+        let (_dir, b) = with_coloured_triangle(&mesh_attribute_scene(name, "ply"));
+        let b = b.unwrap_or_else(|e| panic!("{e:#?}"));
+        let Material::Diffuse { reflectance: Param::Texture(t) } = &*b.scene.primitives[0].material else {
+            panic!("{:?}", b.scene.primitives[0].material)
+        };
+        let crate::material::TextureSpec::MeshAttribute { name: n, scale, .. } = &**t else {
+            panic!("{t:?}")
+        };
+        assert_eq!((n.as_str(), *scale), (name, 0.5));
+        let crate::geometry::Shape::Mesh(mesh) = &b.scene.primitives[0].shape else { panic!("a mesh") };
+        let attribute = mesh.attribute(name).expect("the attribute");
+        let v = mesh.attribute_value(attribute, 0, b1, b2);
+        assert!((v - expected).length() < 1e-6, "{name}: {v}");
+    }
+}
+
+#[test]
+fn a_mesh_attribute_the_shape_lacks_is_an_error_at_the_texture() {
+    let (_dir, b) = with_coloured_triangle(&mesh_attribute_scene("vertex_colour", "ply"));
+    let e = b.expect_err("no such attribute");
+    let e = e.iter().find(|d| d.is_error()).expect("an error");
+    assert_eq!(e.message.split(" of the shape at ").next(), Some("the mesh `tri.ply`"), "{}", e.message);
+    assert!(
+        e.message.ends_with(
+            "scene.xml:8 has no mesh attribute `vertex_colour`: it has `vertex_color`, `face_color`"
+        ),
+        "{}",
+        e.message
+    );
+    let at = e.location.as_ref().expect("a place");
+    assert!(at.file.ends_with("scene.xml") && at.span.line == 9, "{at:?}");
+    // Not a mesh: none.
+    let (_dir, b) = with_coloured_triangle(
+        &mesh_attribute_scene("vertex_color", "sphere")
+            .replace(r#"<string name="filename" value="{MESH}"/>"#, ""),
+    );
+    let e = b.expect_err("a sphere has no attributes");
+    assert!(
+        e.iter().any(|d| d.message.contains("the `sphere` shape at") && d.message.ends_with("it has none")),
+        "{e:#?}"
+    );
+    // Neither `vertex_` nor `face_`.
+    let (_dir, b) = with_coloured_triangle(&mesh_attribute_scene("color", "ply"));
+    let e = b.expect_err("a bad name");
+    assert!(e.iter().any(|d| d.message.contains("starts with `vertex_` or `face_`, not `color`")), "{e:#?}");
+}
+
+fn projector(inner: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">{SENSOR}
+<emitter type="projector">
+    <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+    {inner}
+</emitter></scene>"#
+    )
+}
+
+#[test]
+fn a_projector_keeps_its_image_field_of_view_and_frame() {
+    let b = built(&projector(
+        r#"<float name="fov" value="90"/><float name="scale" value="2"/><rgb name="irradiance" value="1, 2, 3"/>"#,
+    ));
+    let Emitter::Projector { irradiance, scale, tan_half, fov_axis, to_world, to_local } =
+        &b.scene.emitters[0]
+    else {
+        panic!("{:?}", b.scene.emitters)
+    };
+    assert_eq!(
+        (irradiance, *scale, *fov_axis),
+        (&Param::Constant(DVec3::new(1.0, 2.0, 3.0)), 2.0, crate::light::FovAxis::X)
+    );
+    assert!((tan_half - 1.0).abs() < 1e-12);
+    assert!((to_world.transform_vector3(DVec3::Z) - DVec3::Z).length() < 1e-12);
+    assert!((*to_local * *to_world - glam::DMat4::IDENTITY).abs_diff_eq(glam::DMat4::ZERO, 1e-12));
+    // Mitsuba's default: 50 mm on 35 mm film, along the diagonal.
+    let b = built(&projector(r#"<rgb name="irradiance" value="1"/>"#));
+    let Emitter::Projector { tan_half, fov_axis, .. } = &b.scene.emitters[0] else { panic!() };
+    assert_eq!(*fov_axis, crate::light::FovAxis::Diagonal);
+    assert!((tan_half - 36f64.hypot(24.0) / 100.0).abs() < 1e-12);
+    // The horizontal half-angle of a diagonal field of view on a 2:1 image.
+    assert!((crate::light::FovAxis::Diagonal.tan_half_x(1.0, 2.0) - 2.0 / 5f64.sqrt()).abs() < 1e-12);
+    assert!((crate::light::FovAxis::Larger.tan_half_x(1.0, 0.5) - 0.5).abs() < 1e-12);
+}
+
+#[test]
+fn a_projector_needs_an_irradiance_and_one_field_of_view() {
+    let e = errors(&projector(r#"<float name="fov" value="30"/>"#));
+    assert!(e.iter().any(|m| m.contains("needs an `irradiance`")), "{e:?}");
+    let e = errors(&projector(
+        r#"<float name="fov" value="30"/><string name="focal_length" value="35mm"/><rgb name="irradiance" value="1"/>"#,
+    ));
+    assert!(e.iter().any(|m| m.contains("not both")), "{e:?}");
+    let e = errors(&projector(r#"<float name="fov" value="180"/><rgb name="irradiance" value="1"/>"#));
+    assert!(e.iter().any(|m| m.contains("between 0 and 180")), "{e:?}");
+}
+
+#[test]
+fn the_direct_integrator_keeps_its_sample_counts() {
+    let scene = |inner: &str| {
+        format!(r#"<scene version="3.0.0"><integrator type="direct">{inner}</integrator>{SENSOR}</scene>"#)
+    };
+    let direct = |inner: &str| built(&scene(inner)).scene.render.direct;
+    use crate::scene::DirectSamples;
+    assert_eq!(direct(""), Some(DirectSamples { emitter_samples: 1, bsdf_samples: 1 }));
+    assert_eq!(
+        direct(r#"<integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="3"/>"#),
+        Some(DirectSamples { emitter_samples: 0, bsdf_samples: 3 })
+    );
+    assert_eq!(
+        direct(r#"<integer name="shading_samples" value="4"/>"#),
+        Some(DirectSamples { emitter_samples: 4, bsdf_samples: 4 })
+    );
+    assert_eq!(built(&scene("")).scene.render.max_depth, Some(2));
+    let e = errors(&scene(
+        r#"<integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="0"/>"#,
+    ));
+    assert!(e.iter().any(|m| m.contains("at least one emitter or BSDF sample")), "{e:?}");
+    let e = errors(&scene(
+        r#"<integer name="shading_samples" value="2"/><integer name="bsdf_samples" value="1"/>"#,
+    ));
+    assert!(e.iter().any(|m| m.contains("not both")), "{e:?}");
+    let e = errors(&scene(r#"<integer name="bsdf_samples" value="-1"/>"#));
+    assert!(e.iter().any(|m| m.contains("`bsdf_samples` must be from 0")), "{e:?}");
+    // The path integrator has none.
+    let b = built(&format!(r#"<scene version="3.0.0"><integrator type="path"/>{SENSOR}</scene>"#));
+    assert_eq!(b.scene.render.direct, None);
+}
+
+#[test]
+fn spheres_and_disks_have_mitsubas_texture_coordinates() {
+    let b = built(&format!(
+        r#"<scene version="3.0.0">{SENSOR}
+        <shape type="sphere"><transform name="to_world"><rotate z="1" angle="90"/><scale value="2"/></transform></shape>
+        <shape type="disk"/>
+        </scene>"#
+    ));
+    // The sphere's frame is `to_world`'s rotation: world +x is its local -y, world +y its +x.
+    let crate::geometry::Shape::Sphere(s) = &b.scene.primitives[0].shape else { panic!("a sphere") };
+    let local = |v: DVec3| crate::prepare::sphere_local(s, v);
+    assert!(
+        close(local(DVec3::X), -DVec3::Y)
+            && close(local(DVec3::Y), DVec3::X)
+            && close(local(DVec3::Z), DVec3::Z)
+    );
+    assert!(close(crate::prepare::sphere_world(s, DVec3::X), DVec3::Y));
+    // The disk: `v` is the angle over a turn, even near the centre.
+    let crate::geometry::Shape::Mesh(m) = &b.scene.primitives[1].shape else { panic!("a mesh") };
+    let index = 100;
+    let p = m.point_at(index, 0.01, 0.01);
+    // Course order `(t, s)`: `s` is Mitsuba's `u`.
+    let (v, u) = m.texture_coordinates(index, 0.01, 0.01);
+    let angle = p.y.atan2(p.x) / std::f64::consts::TAU;
+    assert!((u - p.truncate().length()).abs() < 1e-4, "u {u} at radius {}", p.truncate().length());
+    assert!((v - angle).abs() < 1e-3, "v {v} at angle {angle}");
+}
+
+#[test]
+fn a_crop_window_renders_its_part_of_the_film() {
+    for sensor in ["perspective", "orthographic", "thinlens"] {
+        let scene = |crop: &str| {
+            format!(
+                r#"<scene version="3.0.0"><sensor type="{sensor}"><float name="fov" value="50"/>
+                <transform name="to_world"><lookat origin="1, 2, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+                <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="32"/>{crop}</film>
+                </sensor></scene>"#
+            )
+        };
+        let full = built(&scene("")).scene.camera;
+        let cropped = built(&scene(
+            r#"<integer name="crop_offset_x" value="40"/><integer name="crop_offset_y" value="5"/>
+            <integer name="crop_width" value="16"/><integer name="crop_height" value="20"/>"#,
+        ))
+        .scene
+        .camera;
+        assert_eq!((cropped.image_width, cropped.image_height), (16, 20));
+        let a = crate::camera::Camera::new(&full, 64, 32, 1.0);
+        let b = crate::camera::Camera::new(&cropped, 16, 20, 1.0);
+        for (x, y) in [(0.0, 0.0), (16.0, 20.0), (3.5, 11.25)] {
+            let (ra, rb) = (a.ray(40.0 + x, 5.0 + y, (0.5, 0.5)), b.ray(x, y, (0.5, 0.5)));
+            assert!(
+                close(ra.origin, rb.origin) && close(ra.dir, rb.dir),
+                "{sensor} ({x}, {y}): {ra:?} {rb:?}"
+            );
+        }
+    }
+    let e = errors(&format!(
+        r#"<scene version="3.0.0">{}</scene>"#,
+        SENSOR.replace("<rfilter", r#"<integer name="crop_width" value="65"/><rfilter"#)
+    ));
+    assert!(
+        e.iter()
+            .any(|m| m.contains("crop window (65x32 at 0, 0) must be a non-empty part of the 64x32 film")),
+        "{e:?}"
+    );
+}

@@ -1,5 +1,6 @@
-//! `<texture>` plugins: `bitmap` and `checkerboard` become [`TextureSpec`]s (the images are read
-//! when the scene is prepared).
+//! `<texture>` plugins: `bitmap`, `checkerboard` and `mesh_attribute` become [`TextureSpec`]s
+//! (the images are read when the scene is prepared; a mesh attribute is checked against the
+//! meshes that use it when their shapes are built).
 
 use std::sync::Arc;
 
@@ -25,6 +26,25 @@ impl<'a> Builder<'a> {
                 color1: props.color("color1")?.unwrap_or(DVec3::splat(0.2)),
                 to_uv: to_uv(&props)?,
             },
+            "mesh_attribute" => {
+                let (name, pos) = props.string("name")?.ok_or_else(|| {
+                    props.error("a `mesh_attribute` needs a `name` (`vertex_color`, `face_color`...)")
+                })?;
+                if !name.starts_with("vertex_") && !name.starts_with("face_") {
+                    return Err(props.error_at(
+                        pos,
+                        format!(
+                            "a mesh attribute's name starts with `vertex_` or `face_`, not `{}`",
+                            crate::base::diagnostic::clip(name)
+                        ),
+                    ));
+                }
+                TextureSpec::MeshAttribute {
+                    name: name.to_owned(),
+                    scale: props.float("scale", 1.0)?,
+                    location: self.doc.location(props.plugin.pos),
+                }
+            }
             _ => {
                 self.warn(&props, "it reads as a constant 0.5 grey");
                 super::bsdfs::mark_all_read(&props);
