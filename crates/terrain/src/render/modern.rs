@@ -13,7 +13,7 @@ use super::reflection::{REFLECTION_FORMAT, ReflectionTarget};
 use super::sea::SeaPass;
 use super::shadow::ShadowPass;
 use super::sky::{SkyFaces, SkyPass};
-use super::texture::sampler;
+use super::texture::nearest_level_sampler;
 use super::{DrawBudget, RenderError, Renderer};
 use crate::config::SceneConfig;
 use crate::settings::Settings;
@@ -92,7 +92,7 @@ impl ModernLook {
             &[
                 Binding::Texture(&ground_view),
                 Binding::Texture(&noise_view),
-                Binding::Sampler(&sampler(device, true)),
+                Binding::Sampler(&nearest_level_sampler(device)),
             ],
         );
         let land = land_pipelines(
