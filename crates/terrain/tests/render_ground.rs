@@ -160,6 +160,12 @@ fn switching_the_materials_rebuilds_the_land() {
     let again = headless.render(gpu, &view).expect("renders");
     assert!(first != plain, "switching the materials off changed nothing");
     assert!(first == again, "the materials switched back on draw another picture");
-    assert!(plain == render_with(gpu, &world, &off, SIZE, &view), "not the picture of a renderer made without them");
-    assert!(first == render_with(gpu, &world, &on, SIZE, &view), "not the picture of a renderer made with them");
+    assert!(
+        plain == render_with(gpu, &world, &off, SIZE, &view),
+        "not the picture of a renderer made without them"
+    );
+    assert!(
+        first == render_with(gpu, &world, &on, SIZE, &view),
+        "not the picture of a renderer made with them"
+    );
 }
