@@ -169,3 +169,21 @@ fn switching_the_materials_rebuilds_the_land() {
         "not the picture of a renderer made with them"
     );
 }
+
+/// The land's pipeline constant (`GROUND_MATERIALS`) reaches the OpenGL backend too (the web
+/// page's WebGL2 goes through it): there the materials draw as they do on Vulkan.
+#[test]
+fn gl_draws_the_materials_as_vulkan_does() {
+    let Some(vulkan) = gpu(Backend::Vulkan) else { return };
+    let Some(gl) = gpu(Backend::Gl) else { return };
+    let world = cliff_world();
+    let view = view_from([-3.0, 1.3, 0.0], 90.0, 0.0);
+    for materials in [true, false] {
+        let settings = plain_light(materials);
+        let on_vulkan = render_with(vulkan, &world, &settings, SIZE, &view);
+        let on_gl = render_with(gl, &world, &settings, SIZE, &view);
+        let (d, _) = common::difference(&on_vulkan, &on_gl);
+        eprintln!("materials {materials}: {d:?}");
+        assert!(d.mean < 0.5 && d.outliers < 0.01, "materials {materials}: {d:?}");
+    }
+}
