@@ -13,7 +13,10 @@
 //! the large maps.
 //!
 //! Variants of one world are measured in interleaved rounds (a few frames of each in turn), so
-//! that a machine shared with other work slows them alike and their ratios stay meaningful.
+//! that a machine shared with other work slows them alike and their ratios stay meaningful. On
+//! Linux each line also gives the CPU time the process spent a frame (all threads, lavapipe's
+//! included: what a software GPU's frame costs), which other work on the machine disturbs much
+//! less than the wall-clock time.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -69,8 +72,8 @@ fn main() {
         ]);
     }
     println!(
-        "{:<44} {:>10} {:>8} {:>8} {:>9} {:>20}",
-        "scene / look", "median ms", "min ms", "max ms", "setup s", "terrain triangles"
+        "{:<44} {:>10} {:>8} {:>8} {:>8} {:>9} {:>20}",
+        "scene / look", "median ms", "min ms", "max ms", "CPU ms", "setup s", "terrain triangles"
     );
     let mut results = BTreeMap::new();
     for (name, scene) in scenes {
@@ -152,6 +155,7 @@ fn measure_variants(
     let mut setups = vec![Duration::ZERO; variants.len()];
     let mut times: Vec<Vec<Duration>> = vec![Vec::new(); variants.len()];
     let mut triangles = vec![[0; 2]; variants.len()];
+    let mut cpu = vec![Some(Duration::ZERO); variants.len()];
     for round in 0..ROUNDS {
         for (i, variant) in variants.iter().enumerate() {
             let switch = Instant::now();
@@ -169,6 +173,7 @@ fn measure_variants(
             if round == 0 {
                 setups[i] = if i == 0 { setup.elapsed() } else { switch.elapsed() };
             }
+            let cpu_before = process_cpu_time();
             for _ in 0..FRAMES_PER_ROUND {
                 let started = Instant::now();
                 if let Err(error) = headless.draw(gpu, &view) {
@@ -177,6 +182,10 @@ fn measure_variants(
                 }
                 times[i].push(started.elapsed());
             }
+            cpu[i] = match (cpu[i], cpu_before, process_cpu_time()) {
+                (Some(total), Some(before), Some(after)) => Some(total + after.saturating_sub(before)),
+                _ => None,
+            };
             triangles[i] = headless.renderer().terrain_triangles();
         }
     }
@@ -184,13 +193,15 @@ fn measure_variants(
     variants
         .iter()
         .zip(times.iter_mut())
-        .zip(setups.iter().zip(&triangles))
-        .map(|((variant, times), (setup, [direct, mirrored]))| {
+        .zip(setups.iter().zip(&triangles).zip(&cpu))
+        .map(|((variant, times), ((setup, [direct, mirrored]), cpu))| {
             let name = &variant.name;
+            let cpu =
+                cpu.map_or_else(|| "-".to_string(), |cpu| format!("{:.1}", ms(cpu) / times.len() as f64));
             times.sort();
             let median = ms(times[times.len() / 2]);
             println!(
-                "{:<44} {median:>10.1} {:>8.1} {:>8.1} {:>9.2} {:>20}",
+                "{:<44} {median:>10.1} {:>8.1} {:>8.1} {cpu:>8} {:>9.2} {:>20}",
                 format!("{scene} / {name}"),
                 ms(times[0]),
                 ms(times[times.len() - 1]),
@@ -278,6 +289,17 @@ fn culling(gpu: &Gpu, world: &World, config: &SceneConfig, scene: &str) {
             culled / whole
         );
     }
+}
+
+/// The CPU time this process has used (user and system, all threads), where the system tells
+/// (`/proc/self/stat` on Linux, in clock ticks of 1/100 s: `USER_HZ`, fixed by Linux's ABI).
+fn process_cpu_time() -> Option<Duration> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command's name, in parentheses, may hold spaces: the fields after it are plain.
+    let fields: Vec<&str> = stat.get(stat.rfind(')')? + 1..)?.split_whitespace().collect();
+    // utime and stime are the stat's 14th and 15th fields, the 12th and 13th after the name.
+    let ticks = fields.get(11)?.parse::<u64>().ok()? + fields.get(12)?.parse::<u64>().ok()?;
+    Some(Duration::from_millis(ticks * 10))
 }
 
 /// A world to measure.

@@ -7,6 +7,8 @@ mod common;
 
 use common::{gpu, project, render_with, view_from};
 use image::{Rgba, RgbaImage};
+use terrain::SceneConfig;
+use terrain::headless::HeadlessRenderer;
 use terrain::render::{Backend, FrameView};
 use terrain::settings::Settings;
 use terrain::world::{Heightmap, SkyBox, World};
@@ -138,4 +140,50 @@ fn materials_follow_the_land() {
         rock.iter().copied().fold(f32::MIN, f32::max) - rock.iter().copied().fold(f32::MAX, f32::min);
     assert!(spread < 30.0, "rock {rock:?}");
     assert!(snow.iter().all(|&c| c > 170.0), "snow {snow:?}");
+}
+
+/// The land's pipelines are built for the materials on or off (`GROUND_MATERIALS`): switching
+/// them on a running renderer builds them again, and gives the pictures a renderer made with
+/// either setting draws.
+#[test]
+fn switching_the_materials_rebuilds_the_land() {
+    let Some(gpu) = gpu(Backend::Vulkan) else { return };
+    let world = cliff_world();
+    let view = view_from([-3.0, 1.3, 0.0], 90.0, 0.0);
+    let (on, off) = (plain_light(true), plain_light(false));
+    let mut headless =
+        HeadlessRenderer::new(gpu, &world, &SceneConfig::default(), &on, SIZE.0, SIZE.1).expect("renderer");
+    let first = headless.render(gpu, &view).expect("renders");
+    headless.renderer_mut().apply(gpu, &world, &off).expect("switches");
+    let plain = headless.render(gpu, &view).expect("renders");
+    headless.renderer_mut().apply(gpu, &world, &on).expect("switches back");
+    let again = headless.render(gpu, &view).expect("renders");
+    assert!(first != plain, "switching the materials off changed nothing");
+    assert!(first == again, "the materials switched back on draw another picture");
+    assert!(
+        plain == render_with(gpu, &world, &off, SIZE, &view),
+        "not the picture of a renderer made without them"
+    );
+    assert!(
+        first == render_with(gpu, &world, &on, SIZE, &view),
+        "not the picture of a renderer made with them"
+    );
+}
+
+/// The land's pipeline constant (`GROUND_MATERIALS`) reaches the OpenGL backend too (the web
+/// page's WebGL2 goes through it): there the materials draw as they do on Vulkan.
+#[test]
+fn gl_draws_the_materials_as_vulkan_does() {
+    let Some(vulkan) = gpu(Backend::Vulkan) else { return };
+    let Some(gl) = gpu(Backend::Gl) else { return };
+    let world = cliff_world();
+    let view = view_from([-3.0, 1.3, 0.0], 90.0, 0.0);
+    for materials in [true, false] {
+        let settings = plain_light(materials);
+        let on_vulkan = render_with(vulkan, &world, &settings, SIZE, &view);
+        let on_gl = render_with(gl, &world, &settings, SIZE, &view);
+        let (d, _) = common::difference(&on_vulkan, &on_gl);
+        eprintln!("materials {materials}: {d:?}");
+        assert!(d.mean < 0.5 && d.outliers < 0.01, "materials {materials}: {d:?}");
+    }
 }

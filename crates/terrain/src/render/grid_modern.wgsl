@@ -5,6 +5,11 @@
 // faded into the sky's colour by the fog. With the materials off: the colour map (without baked
 // shading where the world has one) with the detail map.
 
+// Whether the ground's materials are drawn: a constant of the pipeline (one pipeline each way),
+// because lavapipe, which runs the shader on the CPU, works out both sides of a `select` and
+// would pay for the materials' samples with them off and for the colour map's detail with them on.
+override GROUND_MATERIALS: bool = true;
+
 @group(1) @binding(2) var colour_map: texture_2d<f32>;
 @group(1) @binding(3) var detail_map: texture_2d<f32>;
 @group(1) @binding(4) var edge_clamp: sampler;
@@ -148,7 +153,7 @@ fn shade(in: LitGridVertex, full: bool) -> vec4<f32> {
     let key = scene.sun_direction.xyz;
     let relit = clamp(max(dot(detailed, key), 0.0) / max(dot(normal, key), 0.12), 0.0, 2.0);
 
-    let on = scene.ground.x > 0.5;
+    let on = GROUND_MATERIALS;
     let albedo = select(plain, blended, on);
     let sun_light = select(light.x, light.x * relit, on);
     let lit = lit_surface(albedo, vec2<f32>(sun_light, light.y));

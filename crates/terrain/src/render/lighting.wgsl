@@ -40,7 +40,8 @@ struct Scene {
     sky_sun: vec4<f32>,
     // The sun's disc colour (stored values), w: 0 by day to 1 at night (the moon's disc).
     sun_disc: vec4<f32>,
-    // The ground's materials: x: 1 when on, y: 1 - cos(the rock's slope), z: the snow line and
+    // The ground's materials: x: 1 when on (the land's pipelines are built for it, see
+    // `GROUND_MATERIALS`), y: 1 - cos(the rock's slope), z: the snow line and
     // w: the sand line (world y; far below the land without a sea).
     ground: vec4<f32>,
     // x: 1 / world units a tile of the material noise spans, y: the detail normals' strength,

@@ -262,7 +262,7 @@ impl Renderer {
                 if let Some(grid) = &self.grid {
                     let modern = gpu
                         .scoped("modern look's light map, shadow map, reflection and textures", || {
-                            ModernLook::new(&context, world, &self.config, grid)
+                            ModernLook::new(&context, world, &self.config, grid, settings.ground.materials)
                         })??;
                     self.modern = Some(modern);
                 }
@@ -274,7 +274,7 @@ impl Renderer {
             course.set_wireframe(&context, wireframe);
         }
         if let Some(modern) = &mut self.modern {
-            modern.set_wireframe(&context, wireframe);
+            modern.set_land(&context, wireframe, settings.ground.materials);
         }
         self.settings = settings.clone();
         gpu.check()?;

@@ -13,7 +13,7 @@ use super::reflection::{REFLECTION_FORMAT, ReflectionTarget};
 use super::sea::SeaPass;
 use super::shadow::ShadowPass;
 use super::sky::{SkyFaces, SkyPass};
-use super::texture::sampler;
+use super::texture::nearest_level_sampler;
 use super::{DrawBudget, RenderError, Renderer};
 use crate::config::SceneConfig;
 use crate::settings::Settings;
@@ -41,6 +41,8 @@ pub struct ModernLook {
     land: [wgpu::RenderPipeline; 2],
     wireframe: Option<[wgpu::RenderPipeline; 2]>,
     show_wireframe: bool,
+    /// Whether the land's pipelines draw the ground's materials (`GROUND_MATERIALS`).
+    materials: bool,
     shadow: ShadowPass,
     /// The grid's heights alone (the shadow pass's group 1).
     heights_group: wgpu::BindGroup,
@@ -55,12 +57,13 @@ pub struct ModernLook {
 
 impl ModernLook {
     /// Uploads what the modern look needs of `world` (its albedo and clear sky where it has
-    /// them), drawing over `grid`.
+    /// them), drawing over `grid`, with the ground's materials (`materials`) or without.
     pub fn new(
         context: &PassContext<'_>,
         world: &World,
         config: &SceneConfig,
         grid: &GridTerrain,
+        materials: bool,
     ) -> Result<Self, RenderError> {
         let device = context.device;
         let faces = SkyFaces::new(context, world.clear_sky())?;
@@ -89,13 +92,14 @@ impl ModernLook {
             &[
                 Binding::Texture(&ground_view),
                 Binding::Texture(&noise_view),
-                Binding::Sampler(&sampler(device, true)),
+                Binding::Sampler(&nearest_level_sampler(device)),
             ],
         );
         let land = land_pipelines(
             context,
             [&land_layout, &lighting.layout, &ground_layout],
             wgpu::PolygonMode::Fill,
+            materials,
         );
         let (heights_layout, heights_group) = grid.heights_group(device);
         let shadow = ShadowPass::new(context, &heights_layout);
@@ -124,6 +128,7 @@ impl ModernLook {
             land,
             wireframe: None,
             show_wireframe: false,
+            materials,
             shadow,
             heights_group,
             light_map,
@@ -142,31 +147,38 @@ impl ModernLook {
         (self.light_map.gpu_bytes(), rest)
     }
 
-    /// Draws the land's edges (`on`) or its faces, where the GPU can.
-    pub fn set_wireframe(&mut self, context: &PassContext<'_>, on: bool) {
-        let able = context.device.features().contains(wgpu::Features::POLYGON_MODE_LINE);
-        if on && able && self.wireframe.is_none() {
-            self.wireframe = Some(land_pipelines(
-                context,
-                [&self.land_layout, &self.lighting.layout, &self.ground_layout],
-                wgpu::PolygonMode::Line,
-            ));
+    /// Draws the land's edges (`wireframe`) or its faces, where the GPU can, with the ground's
+    /// materials (`materials`) or without: the land's pipelines are built again when that changes.
+    pub fn set_land(&mut self, context: &PassContext<'_>, wireframe: bool, materials: bool) {
+        let layouts = [&self.land_layout, &self.lighting.layout, &self.ground_layout];
+        if materials != self.materials {
+            self.land = land_pipelines(context, layouts, wgpu::PolygonMode::Fill, materials);
+            self.wireframe = None;
+            self.materials = materials;
         }
-        self.show_wireframe = on && able;
+        let able = context.device.features().contains(wgpu::Features::POLYGON_MODE_LINE);
+        if wireframe && able && self.wireframe.is_none() {
+            self.wireframe = Some(land_pipelines(context, layouts, wgpu::PolygonMode::Line, materials));
+        }
+        self.show_wireframe = wireframe && able;
     }
 }
 
 /// The modern land's pipelines: as it is (into the frame) and reflected (into the reflection).
-/// `layouts`: the land's group (1), the lighting (2) and the ground's materials (3).
+/// `layouts`: the land's group (1), the lighting (2) and the ground's materials (3);
+/// `materials`: whether they draw the ground's materials.
 fn land_pipelines(
     context: &PassContext<'_>,
     layouts: [&wgpu::BindGroupLayout; 3],
     polygon_mode: wgpu::PolygonMode,
+    materials: bool,
 ) -> [wgpu::RenderPipeline; 2] {
     let buffers = GridTerrain::buffer_layouts();
+    let constants = [("GROUND_MATERIALS", if materials { 1.0 } else { 0.0 })];
     let spec = PipelineSpec {
         polygon_mode,
         vertex_entry: "vs_lit",
+        constants: &constants,
         ..PipelineSpec::new("land (modern)", LAND_SHADER, &layouts, &buffers)
     };
     let reflected = PipelineSpec { fragment_entry: Some("fs_reflected"), ..spec };

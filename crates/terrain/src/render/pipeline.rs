@@ -38,6 +38,8 @@ pub struct PipelineSpec<'a> {
     pub depth_bias: wgpu::DepthBiasState,
     /// Whether the pass has a depth buffer to test against.
     pub depth: bool,
+    /// Values of the shader's `override` constants, by name (booleans as 0 or 1).
+    pub constants: &'a [(&'a str, f64)],
 }
 
 impl<'a> PipelineSpec<'a> {
@@ -61,6 +63,7 @@ impl<'a> PipelineSpec<'a> {
             polygon_mode: wgpu::PolygonMode::Fill,
             depth_bias: wgpu::DepthBiasState::default(),
             depth: true,
+            constants: &[],
         }
     }
 }
@@ -130,7 +133,10 @@ fn build(
         vertex: wgpu::VertexState {
             module,
             entry_point: Some(spec.vertex_entry),
-            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: spec.constants,
+                ..Default::default()
+            },
             buffers: &buffers,
         },
         primitive: wgpu::PrimitiveState {
@@ -153,7 +159,10 @@ fn build(
         fragment: spec.fragment_entry.map(|entry| wgpu::FragmentState {
             module,
             entry_point: Some(entry),
-            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: spec.constants,
+                ..Default::default()
+            },
             targets: &targets,
         }),
         multiview_mask: None,

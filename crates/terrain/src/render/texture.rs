@@ -89,6 +89,23 @@ pub fn sampler(device: &wgpu::Device, repeat: bool) -> wgpu::Sampler {
     })
 }
 
+/// A sampler that repeats texture coordinates and filters bilinearly within the nearest mip
+/// level, without blending two levels as [`sampler`] does: for the ground's material noise,
+/// whose grain hides where the level changes. On lavapipe, which runs the shaders on the CPU, a
+/// sample costs about half a trilinear one.
+pub fn nearest_level_sampler(device: &wgpu::Device) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("repeat, nearest level"),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: wgpu::AddressMode::Repeat,
+        address_mode_w: wgpu::AddressMode::Repeat,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        mipmap_filter: wgpu::MipmapFilterMode::Nearest,
+        ..Default::default()
+    })
+}
+
 /// A depth buffer matching a colour target's size.
 #[derive(Debug)]
 pub struct DepthBuffer {
