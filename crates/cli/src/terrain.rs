@@ -422,7 +422,7 @@ fn write_exports(
         outln!("wrote {} ({columns}x{rows} heights)", out.display());
     }
     if let Some(out) = &export.splat {
-        let map = terrain_world::splat::splat_map(world, config, &settings.ground);
+        let map = terrain_world::splat::splat_map(world, config, &settings.ground.lines(config));
         let [first, second] = terrain_world::export::save_splat(&map, out).map_err(|e| e.to_string())?;
         outln!(
             "wrote {} (rock, scree, grass, sand) and {} (snow), {columns}x{rows} weights",

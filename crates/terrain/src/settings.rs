@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::output::{SaveError, write_file};
 use crate::world::atmosphere::{TimeOfDay, solar_position};
+use crate::world::splat::GroundLines;
 
 /// Largest settings file read, in bytes (a full one is about 1 KB).
 pub const MAX_SETTINGS_BYTES: u64 = 1 << 20;
@@ -286,6 +287,13 @@ pub struct GroundSettings {
     /// The size of the materials' grain: world units one tile of their texture spans, as a
     /// fraction of the terrain's side (0.002 to 0.5).
     pub texture_size: f32,
+}
+
+impl GroundSettings {
+    /// Where the materials start in a scene laid out by `config`, in world units.
+    pub fn lines(&self, config: &crate::config::SceneConfig) -> GroundLines {
+        GroundLines::new(self.rock_slope_degrees, self.snow_line, self.sand_line, config)
+    }
 }
 
 impl Default for GroundSettings {

@@ -1,5 +1,5 @@
-//! Acceleration structures: an 8-wide bounding-volume hierarchy over the scene's primitives and,
-//! inside every triangle mesh, over its triangles.
+//! Acceleration structures: an 8-wide bounding-volume hierarchy, over the scene's primitives and
+//! over the triangles of all its meshes.
 
 pub mod wide;
 

@@ -1,13 +1,14 @@
-//! Triangle meshes (`primitive mesh`, `primitive polyhedron`): vertices in single precision,
-//! their own 8-wide BVH, and triangles tested four at a time with the watertight test.
+//! Triangle meshes (`primitive mesh`, `primitive polyhedron`, Mitsuba's mesh shapes): vertices in
+//! single precision, triangles tested four at a time with the watertight test
+//! ([`super::triangle_set`]).
 //!
-//! A mesh is one primitive of the scene (one material): the scene's BVH holds it as one item and
-//! its own BVH holds its triangles (a two-level hierarchy without transforms, as the vertices are
-//! already in world space). A mesh file with several `usemtl` materials becomes one primitive per
-//! material, sharing the vertex arrays.
+//! A mesh is one primitive of the scene (one material); a mesh file with several `usemtl`
+//! materials becomes one primitive per material, sharing the vertex arrays. A prepared scene puts
+//! the triangles of all its meshes in one BVH (`prepare::SceneTriangles`); a mesh asked alone
+//! (tests, benchmarks) builds a BVH of its own at the first ray.
 //!
 //! Storage per triangle: its vertex indices (12 bytes, plus 12 for separate normal or texture
-//! indices when the file has them), its corners in the leaf-ordered packets of the BVH and its
+//! indices when the file has them), its corners in the leaf-ordered packets of a BVH and its
 //! index there (40 bytes), and its share of the BVH nodes (about 12 bytes: 3,867 nodes for the
 //! bunny's 70,580 triangles); vertices take 12 bytes for the position and 12 for the normal (8 for
 //! texture coordinates).

@@ -200,8 +200,11 @@ mod tests {
         let config = SceneConfig::default();
         let world =
             generate(ProceduralOptions { seed: 3, heightmap_size: 40 }, &config, &mut |_| {}).expect("valid");
-        let map =
-            crate::world::splat::splat_map(&world, &config, &crate::settings::GroundSettings::default());
+        let map = crate::world::splat::splat_map(
+            &world,
+            &config,
+            &crate::settings::GroundSettings::default().lines(&config),
+        );
         let dir = tempfile::tempdir().expect("temporary folder");
         let paths = save_splat(&map, &dir.path().join("ground.PNG")).expect("writable");
         assert_eq!(paths[1], dir.path().join("ground_1.png"));

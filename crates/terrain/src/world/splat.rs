@@ -2,7 +2,7 @@
 //! modern look's terrain shader works out per vertex (`vs_lit` in `render/grid_modern.wgsl`),
 //! from the same inputs: the shape map of [`super::ground::ground_map`] (normal, curvature) and
 //! the detail map's green channel (broad patches), both sampled bilinearly as the GPU does, the
-//! height, and the [`GroundSettings`]' rock slope, snow line and sand line.
+//! height, and the ground settings' rock slope, snow line and sand line ([`GroundLines`]).
 //!
 //! Five materials, in this order: rock (cliffs), scree (moderately steep hollows), grass (and
 //! soil: the rest), sand (shores), snow (high up, least on steep slopes). At each heightmap
@@ -19,7 +19,6 @@ use rayon::prelude::*;
 use super::ground::ground_map;
 use super::{Heightfield, World};
 use crate::config::SceneConfig;
-use crate::settings::GroundSettings;
 
 /// The materials' names, in the order of their weights.
 pub const MATERIALS: [&str; 5] = ["rock", "scree", "grass", "sand", "snow"];
@@ -38,13 +37,15 @@ pub struct GroundLines {
 }
 
 impl GroundLines {
-    /// The lines of `ground` for a scene laid out by `config` (as `render::lighting` sets them).
-    pub fn new(ground: &GroundSettings, config: &SceneConfig) -> Self {
+    /// The lines for a scene laid out by `config` (as `render::lighting` sets them) from the
+    /// ground settings' rock slope (degrees), snow line and sand line (shares of the land's
+    /// highest point).
+    pub fn new(rock_slope_degrees: f32, snow_line: f32, sand_line: f32, config: &SceneConfig) -> Self {
         let top = config.height_of_level(255.0).max(1e-3);
         Self {
-            rock_slope: 1.0 - ground.rock_slope_degrees.to_radians().cos(),
-            snow_line: ground.snow_line * top,
-            sand_line: if config.sea { ground.sand_line * top } else { -1e4 },
+            rock_slope: 1.0 - rock_slope_degrees.to_radians().cos(),
+            snow_line: snow_line * top,
+            sand_line: if config.sea { sand_line * top } else { -1e4 },
             top,
         }
     }
@@ -112,15 +113,14 @@ pub struct SplatMap {
     pub weights: Vec<[f32; 5]>,
 }
 
-/// The weights of `world`'s ground (placed with `config`, with `ground`'s lines) at each of its
+/// The weights of `world`'s ground (placed with `config`, with the ground's `lines`) at each of its
 /// heightmap samples, from the same shape map (with the erosion's maps when the world has them)
 /// and detail map the shader reads. Deterministic: the same world gives the same weights at any
 /// thread count.
-pub fn splat_map(world: &World, config: &SceneConfig, ground: &GroundSettings) -> SplatMap {
+pub fn splat_map(world: &World, config: &SceneConfig, lines: &GroundLines) -> SplatMap {
     let heightmap = &world.heightmap;
     let (columns, rows) = (heightmap.columns(), heightmap.rows());
     let shape = ground_map(heightmap, config, world.erosion.as_ref());
-    let lines = GroundLines::new(ground, config);
     let field = Heightfield::new(heightmap, config);
     let weights = (0..rows)
         .into_par_iter()
@@ -181,9 +181,10 @@ fn quantise(weights: &[f32; 5]) -> [u8; 5] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::settings::GroundSettings;
 
     fn lines() -> GroundLines {
-        GroundLines::new(&GroundSettings::default(), &SceneConfig::default())
+        GroundSettings::default().lines(&SceneConfig::default())
     }
 
     fn strongest(w: [f32; 5]) -> &'static str {
@@ -259,7 +260,7 @@ mod tests {
     #[test]
     fn without_a_sea_there_is_no_shore() {
         let config = SceneConfig { sea: false, ..SceneConfig::default() };
-        let lines = GroundLines::new(&GroundSettings::default(), &config);
+        let lines = GroundSettings::default().lines(&config);
         let w = weights(Vec3::Y, 0.0, 0.001, 0.5, &lines);
         assert_eq!(w[3], 0.0, "{w:?}");
     }
@@ -301,7 +302,7 @@ mod tests {
         let world = crate::world::procedural::generate(options, &config, &mut |_| {}).expect("valid");
         let run = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
-            pool.install(|| splat_map(&world, &config, &GroundSettings::default()))
+            pool.install(|| splat_map(&world, &config, &GroundSettings::default().lines(&config)))
         };
         let (one, two) = (run(1), run(2));
         assert_eq!(one, two);
