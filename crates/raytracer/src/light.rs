@@ -75,8 +75,8 @@ pub enum Emitter {
     Area {
         /// Index into the scene's primitives.
         primitive: u32,
-        /// Emitted radiance.
-        radiance: DVec3,
+        /// Emitted radiance: a colour, or a texture over the shape's texture coordinates.
+        radiance: crate::material::Param,
     },
     /// `point`: light from a point.
     Point {

@@ -73,7 +73,7 @@ impl<'s> DirectTracer<'s> {
         if !self.hide_emitters
             && let Some(emitter) = scene.emitter_of(primitive)
         {
-            out.radiance += self.emitters.emitted(emitter, at.front);
+            out.radiance += self.emitters.emitted(emitter, &at);
         }
         let (n_e, n_b) = (self.samples.emitter_samples, self.samples.bsdf_samples);
         let total = (n_e + n_b) as f64;
@@ -125,7 +125,7 @@ impl<'s> DirectTracer<'s> {
                     None => continue,
                     Some(emitter) => {
                         let there = scene.interaction(&next, p, h);
-                        let le = self.emitters.emitted(emitter, there.front);
+                        let le = self.emitters.emitted(emitter, &there);
                         let pdf = if s.delta || le == DVec3::ZERO {
                             0.0
                         } else {

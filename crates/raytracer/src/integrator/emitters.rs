@@ -20,10 +20,10 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::base::sampling::{Discrete, sphere_cone, sphere_cone_pdf};
-use crate::geometry::{Bounds, MESH_ERROR_SCALE, Ray, SPAWN_OFFSET, Shape, TriangleMesh};
+use crate::geometry::{Bounds, MESH_ERROR_SCALE, Ray, SPAWN_OFFSET, Shape, ShapePart, TriangleMesh};
 use crate::light::Emitter;
-use crate::material::Param;
-use crate::prepare::{EnvironmentMap, PreparedScene, luminance};
+use crate::material::{Param, TextureSpec};
+use crate::prepare::{EnvironmentMap, Interaction, PreparedScene, luminance};
 
 /// What next-event estimation drew: a direction to an emitter and what arrives along it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,9 +63,9 @@ struct Projection {
     aspect: f64,
 }
 
-/// Points per side of the grid a textured projector's mean irradiance is estimated on (for
-/// its power).
-const PROJECTOR_MEAN_GRID: u32 = 16;
+/// Points per side of the grid a texture's mean is estimated on (a textured projector's or area
+/// light's, for its power).
+const TEXTURE_MEAN_GRID: u32 = 16;
 
 /// The environment map's sampling distribution: rows by their weight, then texels in the row.
 #[derive(Debug)]
@@ -140,11 +140,11 @@ impl<'s> Emitters<'s> {
                         let area: f64 = areas.iter().sum();
                         let shape =
                             AreaShape::Mesh { mesh: mesh.clone(), triangles: Discrete::new(&areas), area };
-                        (Some(shape), mean(*radiance) * PI * area)
+                        (Some(shape), mean_radiance(scene, radiance) * PI * area)
                     }
                     Shape::Sphere(sp) => (
                         Some(AreaShape::Sphere { centre: sp.centre, radius: sp.radius }),
-                        mean(*radiance) * 4.0 * PI * PI * sp.radius * sp.radius,
+                        mean_radiance(scene, radiance) * 4.0 * PI * PI * sp.radius * sp.radius,
                     ),
                     _ => (None, 0.0),
                 },
@@ -156,17 +156,7 @@ impl<'s> Emitters<'s> {
                     // Mitsuba's `resolution()`: the bitmap's, (1, 1) for anything else.
                     let ((w, h), mean_e) = match irradiance {
                         Param::Constant(c) => ((1, 1), mean(*c)),
-                        Param::Texture(t) => {
-                            let n = PROJECTOR_MEAN_GRID;
-                            let mut sum = 0.0;
-                            for j in 0..n {
-                                for i in 0..n {
-                                    let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
-                                    sum += mean(scene.texture_at(t, u, v));
-                                }
-                            }
-                            (scene.texture_resolution(t), sum / (n * n) as f64)
-                        }
+                        Param::Texture(t) => (scene.texture_resolution(t), texture_mean(scene, t)),
                     };
                     let aspect = w as f64 / h.max(1) as f64;
                     let tan_x = fov_axis.tan_half_x(*tan_half, aspect);
@@ -230,12 +220,12 @@ impl<'s> Emitters<'s> {
         }
     }
 
-    /// The radiance area emitter `emitter` sends along a ray that meets its front (`front`) or
-    /// back face.
+    /// The radiance area emitter `emitter` sends along a ray that meets it at `at` (nothing from
+    /// its back face).
     #[inline]
-    pub fn emitted(&self, emitter: u32, front: bool) -> DVec3 {
+    pub fn emitted(&self, emitter: u32, at: &Interaction) -> DVec3 {
         match &self.scene.scene.emitters[emitter as usize] {
-            Emitter::Area { radiance, .. } if front => *radiance,
+            Emitter::Area { radiance, .. } if at.front => self.scene.param(radiance, at),
             _ => DVec3::ZERO,
         }
     }
@@ -260,12 +250,13 @@ impl<'s> Emitters<'s> {
         let (index, choice) = self.choose.sample(u)?;
         let far = 2.0 * self.radius + (p - self.scene.scene.camera.eye).length();
         match &self.scene.scene.emitters[index] {
-            Emitter::Area { radiance, .. } => match self.shapes[index].as_ref()? {
+            Emitter::Area { radiance, primitive } => match self.shapes[index].as_ref()? {
                 AreaShape::Mesh { mesh, triangles, area } => {
                     let (t, _, u1) = triangles.sample_remapped(u1)?;
                     let s = u1.sqrt();
                     let (b1, b2) = (1.0 - s, u2 * s);
                     let target = mesh.point_at(t as u32, b1 as f32, b2 as f32);
+                    let part = ShapePart::Triangle { index: t as u32, b1: b1 as f32, b2: b2 as f32 };
                     let n = mesh.face_normal(t as u32);
                     let to = target - p;
                     let d2 = to.length_squared();
@@ -280,7 +271,7 @@ impl<'s> Emitters<'s> {
                     Some(EmitterSample {
                         wi,
                         target,
-                        radiance: *radiance,
+                        radiance: self.scene.param_on(radiance, *primitive, part, target),
                         pdf: choice * d2 / (area * cos),
                         delta: false,
                         margin,
@@ -291,7 +282,7 @@ impl<'s> Emitters<'s> {
                     Some(EmitterSample {
                         wi,
                         target: p + wi * t,
-                        radiance: *radiance,
+                        radiance: self.scene.param_on(radiance, *primitive, ShapePart::Main, p + wi * t),
                         pdf: choice * pdf,
                         delta: false,
                         margin: SPAWN_OFFSET
@@ -477,6 +468,33 @@ impl MapDistribution {
         }
         self.rows.pmf(row) * self.columns[row].pmf(column) * (w as f64 * h as f64) / (2.0 * PI * PI * sin)
     }
+}
+
+/// The mean of an area emitter's radiance for choosing among emitters: a colour's mean, a
+/// texture's mean over a grid of its texture coordinates, or 1 where that is not known (a mesh
+/// attribute) or not positive (so that a textured light is still chosen).
+fn mean_radiance(scene: &PreparedScene, radiance: &Param) -> f64 {
+    match radiance {
+        Param::Constant(c) => mean(*c),
+        Param::Texture(t) => {
+            let m = texture_mean(scene, t);
+            if m > 0.0 && m.is_finite() { m } else { 1.0 }
+        }
+    }
+}
+
+/// The mean of a texture's channel means over a grid of [`TEXTURE_MEAN_GRID`] squared texture
+/// coordinates (cell centres), for power estimates.
+fn texture_mean(scene: &PreparedScene, t: &Arc<TextureSpec>) -> f64 {
+    let n = TEXTURE_MEAN_GRID;
+    let mut sum = 0.0;
+    for j in 0..n {
+        for i in 0..n {
+            let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+            sum += mean(scene.texture_at(t, u, v));
+        }
+    }
+    sum / (n * n) as f64
 }
 
 #[cfg(test)]

@@ -124,7 +124,7 @@ impl<'s> PhysicalTracer<'s> {
             };
             let at = scene.interaction(&ray, primitive, hit);
             if seen && let Some(emitter) = scene.emitter_of(primitive) {
-                let le = self.emitters.emitted(emitter, at.front);
+                let le = self.emitters.emitted(emitter, &at);
                 if le != DVec3::ZERO {
                     let weight = match previous {
                         Some((p, pdf)) => power_heuristic(

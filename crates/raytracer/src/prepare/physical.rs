@@ -95,6 +95,7 @@ fn bitmap_specs(scene: &Scene) -> Vec<&Arc<TextureSpec>> {
         let texture = match e {
             Emitter::Spot { texture: Some(t), .. } => t,
             Emitter::Projector { irradiance: Param::Texture(t), .. } => t,
+            Emitter::Area { radiance: Param::Texture(t), .. } => t,
             _ => continue,
         };
         if matches!(**texture, TextureSpec::Bitmap { .. })
@@ -220,19 +221,24 @@ impl PreparedScene {
     /// [`sphere_local`]).
     #[inline]
     pub fn surface_uv(&self, at: &Interaction) -> (f64, f64) {
-        let shape = &self.scene.primitives[at.primitive as usize].shape;
-        match (shape, at.part) {
+        self.uv_on(at.primitive, at.part, at.point)
+    }
+
+    /// [`PreparedScene::surface_uv`] at `point` on part `part` of primitive `primitive`.
+    fn uv_on(&self, primitive: u32, part: ShapePart, point: DVec3) -> (f64, f64) {
+        let shape = &self.scene.primitives[primitive as usize].shape;
+        match (shape, part) {
             (Shape::Sphere(s), _) => {
-                let d = sphere_local(s, (at.point - s.centre) / s.radius);
+                let d = sphere_local(s, (point - s.centre) / s.radius);
                 let phi = d.y.atan2(d.x) / TAU;
                 (phi - phi.floor(), d.z.clamp(-1.0, 1.0).acos() / PI)
             }
             (_, part @ ShapePart::Triangle { .. }) => {
                 // The course's order is `(t, s)`.
-                let (t, s) = shape.texture_coordinates(at.point, part);
+                let (t, s) = shape.texture_coordinates(point, part);
                 (s, t)
             }
-            (_, part) => shape.texture_coordinates(at.point, part),
+            (_, part) => shape.texture_coordinates(point, part),
         }
     }
 
@@ -355,25 +361,30 @@ impl PreparedScene {
     /// A colour parameter at an interaction.
     #[inline]
     pub fn param(&self, param: &Param, at: &Interaction) -> DVec3 {
+        self.param_on(param, at.primitive, at.part, at.point)
+    }
+
+    /// A colour parameter at `point` on part `part` of primitive `primitive` (a point drawn on
+    /// an emitter rather than hit by a ray).
+    #[inline]
+    pub fn param_on(&self, param: &Param, primitive: u32, part: ShapePart, point: DVec3) -> DVec3 {
         match param {
             Param::Constant(c) => *c,
-            Param::Texture(t) => self.texture_value(t, at),
+            Param::Texture(spec) => {
+                if let TextureSpec::MeshAttribute { name, scale, .. } = &**spec {
+                    return self.mesh_attribute(name, primitive, part) * *scale;
+                }
+                let (u, v) = self.uv_on(primitive, part, point);
+                self.texture_at(spec, u, v)
+            }
         }
     }
 
-    fn texture_value(&self, spec: &Arc<TextureSpec>, at: &Interaction) -> DVec3 {
-        if let TextureSpec::MeshAttribute { name, scale, .. } = &**spec {
-            return self.mesh_attribute(name, at) * *scale;
-        }
-        let (u, v) = self.surface_uv(at);
-        self.texture_at(spec, u, v)
-    }
-
-    /// The mesh attribute `name` at an interaction: interpolated or per face as
-    /// [`crate::geometry::TriangleMesh::attribute_value`]; black off a mesh that has it.
-    fn mesh_attribute(&self, name: &str, at: &Interaction) -> DVec3 {
-        let shape = &self.scene.primitives[at.primitive as usize].shape;
-        match (shape, at.part) {
+    /// The mesh attribute `name` on part `part` of primitive `primitive`: interpolated or per
+    /// face as [`crate::geometry::TriangleMesh::attribute_value`]; black off a mesh that has it.
+    fn mesh_attribute(&self, name: &str, primitive: u32, part: ShapePart) -> DVec3 {
+        let shape = &self.scene.primitives[primitive as usize].shape;
+        match (shape, part) {
             (Shape::Mesh(m), ShapePart::Triangle { index, b1, b2 }) => {
                 m.attribute(name).map_or(DVec3::ZERO, |a| m.attribute_value(a, index, b1, b2))
             }

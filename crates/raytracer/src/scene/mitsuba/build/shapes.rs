@@ -65,13 +65,12 @@ impl<'a> Builder<'a> {
                     crate::base::diagnostic::clip(e.type_name())
                 )));
             }
-            let radiance = e.color("radiance")?.unwrap_or(DVec3::ONE);
-            // A textured radiance would otherwise pass unnoticed (a nested plugin, not a property).
-            for (_, t) in e.children(PluginKind::Texture) {
-                self.warn(
-                    &Props::new(self.doc, t),
-                    "an `area` emitter's radiance is a constant in rayterra: this one emits Mitsuba's default, 1",
-                );
+            let radiance = self.param(&e, "radiance", 1.0)?;
+            if let crate::material::Param::Texture(t) = &radiance
+                && matches!(**t, crate::material::TextureSpec::MeshAttribute { .. })
+                && !matches!(self.scene.primitives[index as usize].shape, Shape::Mesh(_))
+            {
+                return Err(e.error("a `mesh_attribute` radiance needs a mesh shape"));
             }
             self.finish(&e);
             self.push_emitter(Emitter::Area { primitive: index, radiance });

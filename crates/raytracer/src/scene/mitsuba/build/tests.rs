@@ -64,7 +64,10 @@ fn shapes_with_area_emitters_are_lights_and_share_their_bsdf() {
         *prims[0].material,
         Material::Diffuse { reflectance: Param::Constant(DVec3::new(0.8, 0.1, 0.1)) }
     );
-    assert_eq!(b.scene.emitters, vec![Emitter::Area { primitive: 0, radiance: DVec3::splat(5.0) }]);
+    assert_eq!(
+        b.scene.emitters,
+        vec![Emitter::Area { primitive: 0, radiance: Param::Constant(DVec3::splat(5.0)) }]
+    );
     match &prims[2].shape {
         crate::geometry::Shape::Sphere(s) => {
             assert!((s.centre - DVec3::X).length() < 1e-12 && (s.radius - 1.0).abs() < 1e-12)
@@ -361,19 +364,30 @@ fn principled_takes_mitsubas_defaults_and_parameters() {
 }
 
 #[test]
-fn a_textured_area_emitter_is_a_warning() {
+fn a_textured_area_emitter_emits_its_texture() {
     let b = built(&format!(
         r#"<scene version="3.0.0">{SENSOR}
         <shape type="rectangle"><emitter type="area"><texture name="radiance" type="checkerboard"/></emitter></shape>
+        <shape type="sphere"><emitter type="area"><rgb name="radiance" value="2, 3, 4"/></emitter></shape>
         </scene>"#
     ));
-    let warnings: Vec<&str> = b
-        .diagnostics
-        .iter()
-        .filter(|d| d.severity == Severity::Warning)
-        .map(|d| d.message.as_str())
-        .collect();
-    assert!(warnings.iter().any(|w| w.contains("`checkerboard`") && w.contains("radiance")), "{warnings:?}");
+    assert!(b.diagnostics.iter().all(|d| d.severity != Severity::Warning), "{:?}", b.diagnostics);
+    match &b.scene.emitters[..] {
+        [
+            Emitter::Area { primitive: 0, radiance: Param::Texture(t) },
+            Emitter::Area { primitive: 1, radiance },
+        ] => {
+            assert!(matches!(**t, crate::material::TextureSpec::Checkerboard { .. }), "{t:?}");
+            assert_eq!(*radiance, Param::Constant(DVec3::new(2.0, 3.0, 4.0)));
+        }
+        other => panic!("{other:?}"),
+    }
+    let refused = errors(&format!(
+        r#"<scene version="3.0.0">{SENSOR}<shape type="sphere"><emitter type="area">
+            <texture name="radiance" type="mesh_attribute"><string name="name" value="vertex_color"/></texture>
+        </emitter></shape></scene>"#
+    ));
+    assert!(refused[0].contains("needs a mesh shape"), "{refused:?}");
 }
 
 /// A triangle whose corners are red, green and blue (`vertex_color`) and whose face is grey
