@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
+use crate::base::color::luminance;
 use crate::base::diagnostic::{clip, clip_path};
 use crate::base::memory::{MemoryBudget, OverBudget};
 pub use crate::scene::texture::{BUILTIN_PREFIX, Builtin, MAX_BUILTIN_COUNT, TextureRef, TextureSource};
@@ -481,17 +482,7 @@ impl Bitmap {
     #[inline]
     pub fn lookup(&self, u: f64, v: f64, nearest: bool, wrap: crate::material::Wrap) -> DVec3 {
         let (w, h) = (self.width as i64, self.height as i64);
-        let index = |i: i64, n: i64| -> u32 {
-            let i = match wrap {
-                crate::material::Wrap::Repeat => i.rem_euclid(n),
-                crate::material::Wrap::Clamp => i.clamp(0, n - 1),
-                crate::material::Wrap::Mirror => {
-                    let m = i.rem_euclid(2 * n);
-                    if m < n { m } else { 2 * n - 1 - m }
-                }
-            };
-            i as u32
-        };
+        let index = |i: i64, n: i64| wrap_index(i, n, wrap);
         let (x, y) = (u * w as f64, v * h as f64);
         if !x.is_finite() || !y.is_finite() {
             return DVec3::ZERO;
@@ -520,8 +511,7 @@ impl Bitmap {
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
         let f = |dx: i64, dy: i64| {
-            let c = self.texel(wrap_index(x0 + dx, w, wrap), wrap_index(y0 + dy, h, wrap));
-            0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+            luminance(self.texel(wrap_index(x0 + dx, w, wrap), wrap_index(y0 + dy, h, wrap)))
         };
         let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
         let dx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);

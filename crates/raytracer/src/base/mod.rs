@@ -9,13 +9,15 @@
 //! - [`memory`]: the memory budget and byte counts for messages;
 //! - [`sampler`] and [`sampling`]: per-pixel random streams, exact sums, and warping of uniform
 //!   numbers to directions;
-//! - [`image_io`]: linear images and their files (PNG, BMP, EXR, HDR).
+//! - [`image_io`]: linear images and their files (PNG, BMP, EXR, HDR);
+//! - [`color`]: colour arithmetic (luminance).
 //!
 //! The rest of the crate keeps its public paths (`raytracer::image_io`, `raytracer::sampler`,
 //! `raytracer::scene::Location`, ...) by re-exporting these modules.
 
 pub mod bounds;
 pub mod checksum;
+pub mod color;
 pub mod diagnostic;
 pub mod error;
 pub mod image_io;

@@ -12,9 +12,10 @@ mod queries;
 mod search;
 mod triangles;
 
+pub use crate::base::color::luminance;
 pub use interaction::Interaction;
 use load::{load_meshes, load_textures};
-pub use physical::{EnvironmentMap, luminance, sphere_local, sphere_world};
+pub use physical::{EnvironmentMap, sphere_local, sphere_world};
 use physical::{Physical, load_physical};
 use queries::FlatSet;
 pub use search::{Located, TextureSearch};

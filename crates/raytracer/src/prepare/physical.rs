@@ -429,9 +429,3 @@ pub fn sphere_world(s: &crate::geometry::Sphere, v: DVec3) -> DVec3 {
     let (z, y) = (s.pole(), s.seam());
     y.cross(z) * v.x + y * v.y + z * v.z
 }
-
-/// The luminance of a linear sRGB colour (Rec. 709 weights, as Mitsuba's `luminance`).
-#[inline]
-pub fn luminance(c: DVec3) -> f64 {
-    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
-}

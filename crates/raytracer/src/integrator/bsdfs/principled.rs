@@ -28,6 +28,7 @@ use glam::DVec3;
 use super::LocalSample;
 use super::fresnel::{fresnel_dielectric, reflect, refract};
 use super::microfacet::{MicrofacetDistribution, cosine_pdf, cosine_sample};
+use crate::base::color::luminance;
 use crate::material::Distribution;
 
 /// A `principled` BSDF with its parameters evaluated at one point.
@@ -325,11 +326,6 @@ pub(super) fn ggx(anisotropic: f64, roughness: f64) -> MicrofacetDistribution {
 pub(super) fn mac_mic_compatible(m: DVec3, wo: DVec3, wi: DVec3, reflection: bool) -> bool {
     let m = if wo.z >= 0.0 { m } else { -m };
     wo.dot(m) > 0.0 && if reflection { wi.dot(m) > 0.0 } else { wi.dot(-m) > 0.0 }
-}
-
-/// Rec. 709 luminance of linear RGB (Mitsuba's `luminance`).
-pub(super) fn luminance(c: DVec3) -> f64 {
-    0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
 }
 
 /// Schlick's weight `(1 - cos)^5`, `cos` clamped to [0, 1].

@@ -24,8 +24,9 @@ use super::LocalSample;
 use super::fresnel::{fresnel_dielectric, reflect};
 use super::microfacet::{MicrofacetDistribution, cosine_pdf, cosine_sample};
 use super::principled::{
-    disney_diffuse, ggx, luminance, mac_mic_compatible, schlick, schlick_r0, schlick_weight, sheen_colour,
+    disney_diffuse, ggx, mac_mic_compatible, schlick, schlick_r0, schlick_weight, sheen_colour,
 };
+use crate::base::color::luminance;
 
 /// A `principledthin` BSDF with its parameters evaluated at one point.
 #[derive(Clone, Copy, Debug, PartialEq)]
