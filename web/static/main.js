@@ -1,5 +1,6 @@
 // The page: starts the engine (WebAssembly) on the canvas, has the worker build the world
-// (so the page never freezes) and hands it over, and loads heightmap files picked or dropped.
+// (so the page never freezes) and hands it over, and loads heightmap files picked or dropped:
+// elevation data (GeoTIFF, SRTM .hgt, Esri ASCII grid, OpenEXR) or greyscale images.
 import init, { start, deliver_world, page_state, capture } from './pkg/rayterra_web.js';
 
 const $ = (id) => document.getElementById(id);
@@ -100,7 +101,7 @@ async function main() {
     build({ type: 'heightmap', name: file.name, bytes, seed: options.seed }, [bytes]);
   };
   $('file').addEventListener('change', (event) => load(event.target.files[0]));
-  // A heightmap dropped anywhere on the page.
+  // A heightmap or elevation file dropped anywhere on the page.
   const hud = $('hud');
   document.body.addEventListener('dragover', (event) => {
     event.preventDefault();

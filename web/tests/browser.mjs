@@ -3,9 +3,12 @@
 // writes what it saw into --out for tests/browser.rs to check: the page's reported state, the
 // frames read back from the engine, a compositor screenshot, and the messages shown. Both looks
 // are drawn on both APIs (the course look also with `api=webgl`); without
-// either API, and with a bad address, the message must still be there seconds later.
+// either API, and with a bad address, the message must still be there seconds later. With
+// WebGPU and with WebGL2, elevation data (--dem) is then picked in the file input: the page's
+// state, frame and screenshot with it are written too, and the message for a broken elevation
+// file (--corrupt-dem).
 //
-// node browser.mjs --url http://127.0.0.1:PORT --out DIR --corrupt FILE
+// node browser.mjs --url http://127.0.0.1:PORT --out DIR --corrupt FILE --dem FILE --corrupt-dem FILE
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
 import puppeteer from 'puppeteer-core';
@@ -15,7 +18,8 @@ const arg = (name) => {
   if (at < 0 || at + 1 >= process.argv.length) throw new Error(`missing --${name}`);
   return process.argv[at + 1];
 };
-const [url, out, corrupt] = [arg('url'), arg('out'), arg('corrupt')];
+const [url, out, corrupt, dem, corruptDem] =
+  [arg('url'), arg('out'), arg('corrupt'), arg('dem'), arg('corrupt-dem')];
 
 // Quiet, offline, as root in a container.
 const common = ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
@@ -201,6 +205,29 @@ async function run(mode) {
     await input.uploadFile(corrupt);
     report.corrupt = await waitFor(page, 'the corrupt file to be refused', errorShown, 60);
     report.afterCorrupt = await state(page);
+    // Elevation data picked in the file input: the world, its scene and its camera start follow
+    // the file. Frames drawn with it, then the frame read back and the compositor's picture.
+    // (The corrupt file's message is still shown until the new file is read.)
+    await page.evaluate((message) => { window.rayterra.shownBefore = message; }, report.corrupt);
+    await input.uploadFile(dem);
+    const demState = await waitFor(page, 'the elevation data to be drawn', () => {
+      const s = window.rayterra.state();
+      if (s.error) return s;
+      const box = document.getElementById('error');
+      if (!box.hidden && box.textContent !== window.rayterra.shownBefore) return { failure: box.textContent };
+      if (!s.world?.startsWith('elevation data')) return null;
+      window.rayterra.demFrames ??= s.frames;
+      return s.frames >= window.rayterra.demFrames + 3 ? s : null;
+    }, 180);
+    report.dem = { state: demState, hud: await page.evaluate(() => document.getElementById('world').textContent) };
+    if (!demState.error && !demState.failure) {
+      report.dem.frame = await tryCapture(page, `${mode}-dem-frame`);
+      await canvas.screenshot({ path: join(out, `${mode}-dem-screenshot.png`) });
+    }
+    // A broken elevation file: its message, naming it; the elevation data stays drawn.
+    await input.uploadFile(corruptDem);
+    report.dem.corrupt = await waitFor(page, 'the broken elevation file to be refused', errorShown, 60);
+    report.dem.afterCorrupt = await state(page);
     return report;
   } catch (error) {
     report.failure = String(error?.stack ?? error);
