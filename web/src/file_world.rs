@@ -5,11 +5,11 @@
 //! scene. Runs in the page's worker; no browser needed, so it is tested natively.
 
 use terrain::SceneConfig;
-use terrain::world::dem::{self, DemFormat, PlaceOptions};
+use terrain::world::dem::{self, DemFormat, WaterLevel};
 use terrain::world::procedural::{self, Progress, Stage};
 use terrain::world::{Heightmap, MAX_HEIGHTMAP_SIDE, World};
 
-use crate::address::MAX_PAGE_SIDE;
+use crate::address::{ElevationOptions, MAX_PAGE_SIDE};
 
 /// What the page shows of elevation data: its size, spacing, heights and water.
 #[derive(Debug, Clone, PartialEq)]
@@ -20,12 +20,16 @@ pub struct ElevationSummary {
     pub source_size: (u32, u32),
     /// Metres between neighbouring samples of the heightmap drawn (square cells).
     pub cell_size_metres: f64,
-    /// Whether the file stated no spacing (1 m was taken).
+    /// Whether the file stated no spacing (the address's `cell-size`, or 1 m, was taken).
     pub cell_size_assumed: bool,
     /// Lowest and highest heights, metres.
     pub range_metres: (f32, f32),
-    /// Whether a sea is drawn (some ground lies below the water level, 0 m).
+    /// Whether a sea is drawn (some ground lies below the water level).
     pub sea: bool,
+    /// The water level.
+    pub water_level: WaterLevel,
+    /// The factor on the heights.
+    pub vertical_exaggeration: f64,
     /// Samples the file had no data for, filled from their neighbours.
     pub voids: usize,
 }
@@ -45,20 +49,21 @@ pub struct FileWorld {
 }
 
 /// Builds the world of the file `name` whose content is `bytes`, with the textures of `seed`.
-/// Elevation data keeps the native program's defaults (water at 0 m, true proportions, 1 m
-/// cells where the file states none) and is refused above [`MAX_HEIGHTMAP_SIDE`] samples a
-/// side before it is decoded; what exceeds [`MAX_PAGE_SIDE`] a side is downsampled to it.
-/// Images are refused above [`MAX_PAGE_SIDE`]. Errors name the file.
+/// Elevation data is placed with `options` (the native program's defaults: water at 0 m, true
+/// proportions, 1 m cells where the file states none) and is refused above
+/// [`MAX_HEIGHTMAP_SIDE`] samples a side before it is decoded; what exceeds [`MAX_PAGE_SIDE`] a
+/// side is downsampled to it. Images are refused above [`MAX_PAGE_SIDE`]. Errors name the file.
 pub fn world_from_file(
     bytes: &[u8],
     name: &str,
     seed: u32,
+    options: &ElevationOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<FileWorld, String> {
     progress(Progress { stage: Stage::Heightmap, done: 0.0 });
     match dem::detect(bytes, name) {
         Some(format) => {
-            elevation_world(bytes, name, format, seed, progress).map_err(|error| error.to_string())
+            elevation_world(bytes, name, format, seed, options, progress).map_err(|error| error.to_string())
         }
         None => image_world(bytes, name, seed, progress),
     }
@@ -92,15 +97,16 @@ fn elevation_world(
     name: &str,
     format: DemFormat,
     seed: u32,
+    options: &ElevationOptions,
     progress: &mut dyn FnMut(Progress),
 ) -> Result<FileWorld, dem::DemError> {
     // As `dem::load_bytes` without --max-size (nothing above the engine's limit is decoded),
     // then fitted within the page's limit.
     let elevation = dem::read(bytes, name, false)?;
     let source_size = (elevation.columns, elevation.rows);
-    let prepared = dem::prepare(elevation, name, None, MAX_PAGE_SIDE)?;
+    let prepared = dem::prepare(elevation, name, options.cell_size, MAX_PAGE_SIDE)?;
     let (cell_size_assumed, voids) = (prepared.cell_size_given, prepared.source_voids);
-    let scene = dem::place::place(prepared, &PlaceOptions::default())
+    let scene = dem::place::place(prepared, &options.place)
         .map_err(|error| dem::DemError::new(name, error.to_string()))?;
     let dem::DemScene { heightmap, config, info } = scene;
     let summary = ElevationSummary {
@@ -110,6 +116,8 @@ fn elevation_world(
         cell_size_assumed,
         range_metres: info.range_metres,
         sea: info.sea,
+        water_level: options.place.water_level,
+        vertical_exaggeration: options.place.vertical_exaggeration,
         voids,
     };
     let description = describe(name, &summary, (heightmap.columns(), heightmap.rows()));
@@ -135,14 +143,21 @@ fn describe(name: &str, summary: &ElevationSummary, drawn: (u32, u32)) -> String
     }
     text += &format!(", cell {:.2} m", summary.cell_size_metres);
     if summary.cell_size_assumed {
-        text += " (the file states none: 1 m taken)";
+        text += " (the file states none: the address's cell-size, or 1 m)";
     }
     let (low, high) = summary.range_metres;
     text += &format!(", heights {low:.0} to {high:.0} m");
     if summary.voids > 0 {
         text += &format!(", {} voids filled", summary.voids);
     }
-    text += if summary.sea { "; sea at 0 m" } else { "; no sea (the land lies above 0 m)" };
+    if summary.vertical_exaggeration != 1.0 {
+        text += &format!(", heights x{}", summary.vertical_exaggeration);
+    }
+    text += &match (summary.water_level, summary.sea) {
+        (WaterLevel::Metres(level), true) => format!("; sea at {level} m"),
+        (WaterLevel::Metres(level), false) => format!("; no sea (the land lies above {level} m)"),
+        (WaterLevel::None, _) => "; no sea (water-level=none)".to_string(),
+    };
     text
 }
 
@@ -166,7 +181,8 @@ mod tests {
             ["vinschgau_f32_lzw_utm32n_nodata.tif", "N42E001.hgt", "frontrange_srtmgl3_geographic.asc"]
         {
             let Some(bytes) = shared(name) else { return };
-            let page = world_from_file(&bytes, name, 1, &mut |_| {}).expect(name);
+            let page =
+                world_from_file(&bytes, name, 1, &ElevationOptions::default(), &mut |_| {}).expect(name);
             let native = dem::load_bytes(&bytes, name, &dem::LoadOptions::default()).expect(name);
             assert_eq!(page.config, native.scene.config, "{name}");
             assert_eq!(page.world.heightmap, native.scene.heightmap, "{name}");
@@ -181,7 +197,8 @@ mod tests {
             );
         }
         let Some(bytes) = shared("vinschgau_f32_lzw_utm32n_nodata.tif") else { return };
-        let page = world_from_file(&bytes, "v.tif", 1, &mut |_| {}).expect("vinschgau");
+        let page = world_from_file(&bytes, "v.tif", 1, &ElevationOptions::default(), &mut |_| {})
+            .expect("vinschgau");
         assert_eq!(
             page.description,
             "elevation data v.tif: GeoTiff 252x194 samples, cell 250.00 m, heights 388 to 3863 m, 445 voids filled; no sea (the land lies above 0 m)"
@@ -191,10 +208,42 @@ mod tests {
     #[test]
     fn ground_below_the_water_gets_a_sea() {
         let text = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n-5 0 20\n-2 4 30\n";
-        let page = world_from_file(text.as_bytes(), "coast.asc", 1, &mut |_| {}).expect("grid");
+        let page =
+            world_from_file(text.as_bytes(), "coast.asc", 1, &ElevationOptions::default(), &mut |_| {})
+                .expect("grid");
         assert!(page.config.sea);
         assert!(page.description.ends_with("; sea at 0 m"), "{}", page.description);
         assert!(page.description.contains("cell 10.00 m, heights -5 to 30 m"), "{}", page.description);
+    }
+
+    /// The address's water level, exaggeration and cell size reach the data as the command
+    /// line's do.
+    #[test]
+    fn the_addresses_options_place_the_data_as_the_command_lines() {
+        let Some(bytes) = shared("vinschgau_f32_lzw_utm32n_nodata.tif") else { return };
+        let place = dem::PlaceOptions { water_level: WaterLevel::Metres(1500.0), vertical_exaggeration: 2.0 };
+        let options = ElevationOptions { cell_size: None, place };
+        let page = world_from_file(&bytes, "v.tif", 1, &options, &mut |_| {}).expect("vinschgau");
+        let native_options = dem::LoadOptions { place, ..dem::LoadOptions::default() };
+        let native = dem::load_bytes(&bytes, "v.tif", &native_options).expect("vinschgau");
+        assert_eq!(page.config, native.scene.config);
+        assert_eq!(page.world.heightmap, native.scene.heightmap);
+        assert!(page.config.sea);
+        assert!(page.description.ends_with(", heights x2; sea at 1500 m"), "{}", page.description);
+        let none = ElevationOptions {
+            place: dem::PlaceOptions { water_level: WaterLevel::None, ..place },
+            ..options
+        };
+        let page = world_from_file(&bytes, "v.tif", 1, &none, &mut |_| {}).expect("vinschgau");
+        assert!(!page.config.sea && page.description.ends_with("; no sea (water-level=none)"));
+        // An OpenEXR image states no spacing: the address's cell size is taken.
+        let image = image::Rgb32FImage::from_fn(4, 3, |x, y| image::Rgb([(x * 10 + y) as f32; 3]));
+        let mut exr = std::io::Cursor::new(Vec::new());
+        image::DynamicImage::ImageRgb32F(image).write_to(&mut exr, image::ImageFormat::OpenExr).expect("exr");
+        let sized = ElevationOptions { cell_size: Some(25.0), ..ElevationOptions::default() };
+        let page = world_from_file(exr.get_ref(), "h.exr", 1, &sized, &mut |_| {}).expect("exr");
+        assert_eq!(page.world.elevation.as_ref().map(|info| info.cell_size_metres), Some(25.0));
+        assert!(page.description.contains("cell 25.00 m (the file states none"), "{}", page.description);
     }
 
     #[test]
@@ -202,7 +251,9 @@ mod tests {
         let image = image::GrayImage::from_fn(5, 4, |x, y| image::Luma([(x * 40 + y * 10) as u8]));
         let mut bytes = std::io::Cursor::new(Vec::new());
         image.write_to(&mut bytes, image::ImageFormat::Png).expect("png");
-        let page = world_from_file(bytes.get_ref(), "hills.png", 2, &mut |_| {}).expect("image");
+        let page =
+            world_from_file(bytes.get_ref(), "hills.png", 2, &ElevationOptions::default(), &mut |_| {})
+                .expect("image");
         assert_eq!(page.config, SceneConfig::default());
         assert_eq!(page.description, "heightmap hills.png, 5x4");
         assert!(page.elevation.is_none() && page.world.elevation.is_none());
@@ -218,7 +269,8 @@ mod tests {
             (b"ncols 2\nnrows 2\ncellsize 1\n1 2\n3 five\n".to_vec(), "bad.asc", "bad.asc: line 5"),
             (b"\x89PNG\r\n\x1a\nbroken".to_vec(), "broken.png", "broken.png is not a readable image"),
         ] {
-            let error = world_from_file(&bytes, name, 1, &mut |_| {}).expect_err(name);
+            let error =
+                world_from_file(&bytes, name, 1, &ElevationOptions::default(), &mut |_| {}).expect_err(name);
             assert!(error.contains(says), "{name}: {error}");
         }
     }

@@ -98,7 +98,8 @@ async function main() {
   const load = async (file) => {
     if (!file) return;
     const bytes = await file.arrayBuffer();
-    build({ type: 'heightmap', name: file.name, bytes, seed: options.seed }, [bytes]);
+    // The address's seed and elevation options (water-level, ...) go with it.
+    build({ type: 'heightmap', name: file.name, bytes, query: location.search }, [bytes]);
   };
   $('file').addEventListener('change', (event) => load(event.target.files[0]));
   // A heightmap or elevation file dropped anywhere on the page.

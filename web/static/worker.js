@@ -12,7 +12,7 @@ self.onmessage = async ({ data }) => {
     // height mapping and camera start) and the page's line about it.
     const { layers, description } = data.type === 'generate'
       ? generate_world(data.seed, data.grid, progress)
-      : heightmap_world(new Uint8Array(data.bytes), data.name, data.seed, progress);
+      : heightmap_world(new Uint8Array(data.bytes), data.name, data.query, progress);
     self.postMessage({ type: 'world', layers, description }, layers.map((layer) => layer.data.buffer));
   } catch (error) {
     self.postMessage({ type: 'error', message: error?.message ?? String(error) });

@@ -135,6 +135,44 @@ async function failOnce(browser, { query, world }) {
   }
 }
 
+// The page at `query` with the elevation data picked once it has drawn the island: its state
+// and the frame it drew with the data, written as NAME-frame.rgba.
+async function demOnce(browser, query, name) {
+  const report = { query, pageErrors: [] };
+  const page = await browser.newPage();
+  try {
+    await page.setViewport({ width: 800, height: 600 });
+    page.on('pageerror', (error) => report.pageErrors.push(error.message));
+    await page.goto(`${url}/${query}`);
+    await waitFor(page, `frames of the island (${query})`, () => {
+      const s = window.rayterra?.state?.();
+      return s && (s.error || s.frames >= 3);
+    }, 180);
+    const input = await page.$('#file');
+    await input.uploadFile(dem);
+    report.state = await waitFor(page, `the elevation data to be drawn (${query})`, () => {
+      const s = window.rayterra.state();
+      const box = document.getElementById('error');
+      if (s.error || !box.hidden) return { failure: s.error ?? box.textContent };
+      if (!s.world?.startsWith('elevation data')) return null;
+      window.rayterra.demFrames ??= s.frames;
+      return s.frames >= window.rayterra.demFrames + 3 ? s : null;
+    }, 180);
+    if (!report.state.failure) report.frame = await tryCapture(page, `${name}-frame`);
+    return report;
+  } catch (error) {
+    report.failure = String(error?.stack ?? error);
+    return report;
+  } finally {
+    await page.close();
+  }
+}
+
+// Elevation data with the address's water level above its lowest ground: a lake, drawn.
+const demRuns = {
+  webgl: { 'dem-lake': '?size=640x360&paused&time=3&water-level=1500' },
+};
+
 // The course look (on WebGL2 also asked for by `api=webgl`: Chromium's WebGPU flags here leave
 // it no WebGL2).
 const lookRuns = {
@@ -165,6 +203,9 @@ async function run(mode) {
     }
     for (const [name, query] of Object.entries(lookRuns[mode])) {
       report[name] = await drawOnce(browser, query, `${mode}-${name}`);
+    }
+    for (const [name, query] of Object.entries(demRuns[mode] ?? {})) {
+      report[name] = await demOnce(browser, query, `${mode}-${name}`);
     }
     const page = await browser.newPage();
     await page.setViewport({ width: 800, height: 600 });

@@ -366,6 +366,42 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
         );
     }
 
+    // The elevation data with the address's `water-level=1500`: a sea over its valleys, drawn as
+    // `--water-level 1500` draws it.
+    let place =
+        dem::PlaceOptions { water_level: dem::WaterLevel::Metres(1500.0), ..dem::PlaceOptions::default() };
+    let lake_options = dem::LoadOptions { place, ..dem::LoadOptions::default() };
+    let lake = dem::load_bytes(&dem_bytes, dem_name, &lake_options).expect("elevation data").scene;
+    assert!(lake.config.sea);
+    let lake_view = FrameView { pose: lake.config.camera_start, ..view };
+    let lake_world = procedural::dress_heightmap(lake.heightmap, 1, &lake.config, &mut |_| {});
+    let lake_native = terrain::headless::render_image(
+        &gpu,
+        &lake_world,
+        &lake.config,
+        &Settings::default(),
+        (640, 360),
+        &lake_view,
+    )
+    .expect("native lake frame");
+    let report = &read_json(&out.path().join("webgl.json"))["dem-lake"];
+    assert!(report["failure"].is_null(), "lake: {}", report["failure"]);
+    assert_eq!(report["pageErrors"], serde_json::json!([]), "lake: errors on the page");
+    let state = &report["state"];
+    assert!(state["failure"].is_null(), "lake: {}", state["failure"]);
+    assert_eq!(state["scene"]["sea"], true, "lake: no sea drawn: {}", state["scene"]);
+    assert_eq!(state["elevation"]["baseMetres"].as_f64(), Some(1500.0), "lake: {}", state["elevation"]);
+    let world = state["world"].as_str().expect("the world's line");
+    assert!(world.ends_with("; sea at 1500 m"), "lake: {world}");
+    assert!(report["frame"]["error"].is_null(), "lake: {}", report["frame"]["error"]);
+    let frame = read_frame(out.path(), "webgl-dem-lake-frame", &report["frame"]);
+    let difference = mean_difference(&frame, &lake_native);
+    eprintln!(
+        "webgl: elevation data with water at 1500 m: mean difference from the native render {difference:.2}"
+    );
+    assert!(difference < 1.0, "lake: the page's frame differs from the native render by {difference:.2}");
+    assert!(mean_difference(&lake_native, &dem_native) > 5.0, "the water at 1500 m changes nothing");
+
     let none = read_json(&out.path().join("none.json"));
     assert!(none["failure"].is_null(), "none: {}", none["failure"]);
     let message = none["error"].as_str().expect("a message without WebGPU and WebGL2");

@@ -263,13 +263,20 @@ pub fn generate_world(seed: u32, grid: u32, progress: &Function) -> Result<Objec
 
 /// Builds the world of the file `bytes` named `name` (in the worker) as `rayterra terrain
 /// --heightmap` does: elevation data (GeoTIFF, SRTM .hgt, Esri ASCII grid, OpenEXR) with its own
-/// scene, or a heightmap image (8- or 16-bit PNG, BMP, ...), with the textures of `seed`.
-/// Returns `{ layers, description }`; a file that is not a usable heightmap is an error naming
-/// it.
+/// scene, placed with the address's `water-level`, `vertical-exaggeration` and `cell-size`, or
+/// a heightmap image (8- or 16-bit PNG, BMP, ...), with the textures of the address's `seed`
+/// (`query` is the page's address query). Returns `{ layers, description }`; a file that is not
+/// a usable heightmap is an error naming it.
 #[wasm_bindgen]
-pub fn heightmap_world(bytes: &[u8], name: &str, seed: u32, progress: &Function) -> Result<Object, JsError> {
+pub fn heightmap_world(
+    bytes: &[u8],
+    name: &str,
+    query: &str,
+    progress: &Function,
+) -> Result<Object, JsError> {
     install_panic_hook();
-    let loaded = world_from_file(bytes, name, seed, &mut progress_to(progress))
+    let options = PageOptions::from_query(query).map_err(|error| JsError::new(&error.to_string()))?;
+    let loaded = world_from_file(bytes, name, options.seed, &options.elevation, &mut progress_to(progress))
         .map_err(|message| JsError::new(&message))?;
     Ok(built(layers::to_js(world_into_layers(loaded.world, &loaded.config)), &loaded.description))
 }
