@@ -102,7 +102,7 @@ fn elevation_world(
 ) -> Result<FileWorld, dem::DemError> {
     // As `dem::load_bytes` without --max-size (nothing above the engine's limit is decoded),
     // then fitted within the page's limit.
-    let elevation = dem::read(bytes, name, false)?;
+    let elevation = dem::read(bytes, name, false).map_err(for_the_page)?;
     let source_size = (elevation.columns, elevation.rows);
     let prepared = dem::prepare(elevation, name, options.cell_size, MAX_PAGE_SIDE)?;
     let (cell_size_assumed, voids) = (prepared.cell_size_given, prepared.source_voids);
@@ -124,6 +124,18 @@ fn elevation_world(
     let mut world = procedural::dress_heightmap(heightmap, seed, &config, progress);
     world.elevation = Some(info);
     Ok(FileWorld { world, config, description, elevation: Some(summary) })
+}
+
+/// The reader's advice for the command line, said for the page: it has no `--max-size`.
+fn for_the_page(mut error: dem::DemError) -> dem::DemError {
+    const ADVICE: &str = "(pass --max-size N to downsample it to N a side)";
+    if error.problem.contains(ADVICE) {
+        error.problem = error.problem.replace(
+            ADVICE,
+            &format!("(the page reads up to {MAX_HEIGHTMAP_SIDE} a side; `rayterra terrain --heightmap FILE --max-size N` downsamples larger files)"),
+        );
+    }
+    error
 }
 
 /// The page's line about elevation data, e.g. `elevation data N42E001.hgt: Hgt 1201x1623
@@ -257,6 +269,38 @@ mod tests {
         assert_eq!(page.config, SceneConfig::default());
         assert_eq!(page.description, "heightmap hills.png, 5x4");
         assert!(page.elevation.is_none() && page.world.elevation.is_none());
+    }
+
+    /// Data larger than the page's limit is downsampled to it; larger than the engine's, refused
+    /// before it is decoded, with advice that fits a page.
+    #[test]
+    fn large_data_is_fitted_or_refused() {
+        let grid = |columns: u32| {
+            let mut text = format!("ncols {columns}\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 5\n");
+            for row in 0..2 {
+                let line: Vec<String> = (0..columns).map(|column| (column % 50 + row).to_string()).collect();
+                text += &line.join(" ");
+                text += "\n";
+            }
+            text
+        };
+        let wide = grid(MAX_PAGE_SIDE + 103);
+        let page = world_from_file(wide.as_bytes(), "wide.asc", 1, &ElevationOptions::default(), &mut |_| {})
+            .expect("downsampled");
+        assert_eq!((page.world.heightmap.columns(), page.world.heightmap.rows()), (MAX_PAGE_SIDE, 2));
+        assert!(
+            page.description.contains("samples (4200x2 in the file; the page draws at most 4097 a side)"),
+            "{}",
+            page.description
+        );
+        let cell = page.world.elevation.as_ref().map(|info| info.cell_size_metres).expect("elevation");
+        assert!((cell - 5.0 * 4200.0 / 4097.0).abs() < 1e-9, "{cell}");
+        let huge = grid(MAX_HEIGHTMAP_SIDE + 1);
+        let error =
+            world_from_file(huge.as_bytes(), "huge.asc", 1, &ElevationOptions::default(), &mut |_| {})
+                .expect_err("too large");
+        assert!(error.starts_with("huge.asc: 8194x2 samples is more than"), "{error}");
+        assert!(error.contains("the page reads up to 8193 a side; `rayterra terrain"), "{error}");
     }
 
     #[test]
