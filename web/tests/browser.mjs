@@ -9,8 +9,8 @@
 // file (--corrupt-dem).
 //
 // node browser.mjs --url http://127.0.0.1:PORT --out DIR --corrupt FILE --dem FILE --corrupt-dem FILE
-import { writeFileSync } from 'node:fs';
-import { join } from 'node:path';
+import { readFileSync, writeFileSync } from 'node:fs';
+import { basename, join } from 'node:path';
 import puppeteer from 'puppeteer-core';
 
 const arg = (name) => {
@@ -135,8 +135,9 @@ async function failOnce(browser, { query, world }) {
   }
 }
 
-// The page at `query` with the elevation data picked once it has drawn the island: its state
-// and the frame it drew with the data, written as NAME-frame.rgba.
+// The page at `query` with the elevation data dropped on it once it has drawn the island (a
+// drop event carrying the file, as a file dragged from the desktop gives): its state and the
+// frame it drew with the data, written as NAME-frame.rgba.
 async function demOnce(browser, query, name) {
   const report = { query, pageErrors: [] };
   const page = await browser.newPage();
@@ -148,8 +149,13 @@ async function demOnce(browser, query, name) {
       const s = window.rayterra?.state?.();
       return s && (s.error || s.frames >= 3);
     }, 180);
-    const input = await page.$('#file');
-    await input.uploadFile(dem);
+    await page.evaluate((base64, name) => {
+      const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
+      const transfer = new DataTransfer();
+      transfer.items.add(new File([bytes], name));
+      document.body.dispatchEvent(new DragEvent('dragover', { dataTransfer: transfer, bubbles: true, cancelable: true }));
+      document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: transfer, bubbles: true, cancelable: true }));
+    }, readFileSync(dem).toString('base64'), basename(dem));
     report.state = await waitFor(page, `the elevation data to be drawn (${query})`, () => {
       const s = window.rayterra.state();
       const box = document.getElementById('error');
@@ -168,7 +174,7 @@ async function demOnce(browser, query, name) {
   }
 }
 
-// Elevation data with the address's water level above its lowest ground: a lake, drawn.
+// Elevation data with the address's water level above its lowest ground, dropped: a lake, drawn.
 const demRuns = {
   webgl: { 'dem-lake': '?size=640x360&paused&time=3&water-level=1500' },
 };
