@@ -128,8 +128,8 @@ fn check_layout(image: &RgbaImage, what: &str) {
 
 /// The elevation data the page is given: the shared South Tyrol GeoTIFF (252 x 194 float32
 /// samples, 250 m apart, 445 voids, 388 to 3863 m), or where the shared data is missing (a loud
-/// skip of that file; a failure under CI) an Esri ASCII grid written here: a ridge 2 km above
-/// the sea, 30 m cells.
+/// skip of that file; a failure under CI) an Esri ASCII grid written here: a ridge from about
+/// 800 m up to 2.5 km (valleys below the lake run's 1500 m), 30 m cells.
 fn elevation_file(dir: &Path) -> PathBuf {
     let shared = test_skips::shared_data(&web_dir(), "terrain-dem", "the browser test's real DEM");
     if let Some(shared) = shared {
@@ -146,7 +146,7 @@ fn elevation_file(dir: &Path) -> PathBuf {
                     (f64::from(column) / f64::from(columns) - 0.5, f64::from(row) / f64::from(rows) - 0.5);
                 format!(
                     "{:.1}",
-                    2000.0 + 1500.0 * (-(x * x * 12.0 + y * y * 3.0)).exp() + 200.0 * (x * 20.0).sin()
+                    1000.0 + 1500.0 * (-(x * x * 12.0 + y * y * 3.0)).exp() + 200.0 * (x * 20.0).sin()
                 )
             })
             .collect();
