@@ -184,7 +184,8 @@ fn numbers(values: &[f32]) -> JsValue {
 /// scene, elevation, error }` (`null` where not known yet). `scene` is the drawn world's
 /// `{ sea, start: [x, y, z, yaw, pitch], unitHeight, levelOffset }` (world units, degrees);
 /// `elevation`, for a world made from elevation data, is `{ columns, rows, cellSize, low, high,
-/// sea, baseMetres, voids }` (samples, metres), `null` otherwise.
+/// sea, baseMetres, voids }` (the heightmap drawn, in samples; metres; `voids` counts its samples
+/// that were voids, filled), `null` otherwise.
 #[wasm_bindgen]
 pub fn page_state() -> Object {
     let state = STATE.with(|state| state.borrow().clone());
