@@ -2,6 +2,7 @@
 //! choices as `rayterra terrain`'s command line, spelled the same way.
 
 use terrain::camera::{CameraPose, MAX_FIELD_OF_VIEW_DEGREES, MIN_FIELD_OF_VIEW_DEGREES};
+use terrain::world::dem::{PlaceOptions, WaterLevel};
 use terrain::{Look, SceneConfig};
 
 /// The largest heightmap the page builds a world from (`grid=`, or a file), in samples a side:
@@ -41,6 +42,18 @@ pub struct PageOptions {
     pub api: BrowserApi,
     /// A fixed canvas size in CSS pixels (`size=WxH`); `None` fills the page.
     pub canvas_size: Option<(u32, u32)>,
+    /// How elevation data picked or dropped on the page is placed.
+    pub elevation: ElevationOptions,
+}
+
+/// How elevation data is placed, as `rayterra terrain`'s options of the same names.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ElevationOptions {
+    /// Metres between samples where the file states none (`cell-size=M`; 1 m without it).
+    pub cell_size: Option<f64>,
+    /// The water level in metres or none (`water-level=M|none`) and the factor on the heights
+    /// (`vertical-exaggeration=X`).
+    pub place: PlaceOptions,
 }
 
 impl Default for PageOptions {
@@ -56,6 +69,7 @@ impl Default for PageOptions {
             look: Look::Modern,
             api: BrowserApi::Auto,
             canvas_size: None,
+            elevation: ElevationOptions::default(),
         }
     }
 }
@@ -137,15 +151,33 @@ impl PageOptions {
                         })?,
                     );
                 }
+                "water-level" => {
+                    options.elevation.place.water_level = value.parse::<WaterLevel>().map_err(error)?;
+                }
+                "vertical-exaggeration" => {
+                    options.elevation.place.vertical_exaggeration =
+                        positive(&value).ok_or_else(|| error("must be a positive number".into()))?;
+                }
+                "cell-size" => {
+                    options.elevation.cell_size = Some(
+                        positive(&value)
+                            .ok_or_else(|| error("must be a positive number of metres".into()))?,
+                    );
+                }
                 _ => {
                     return Err(error(
-                        "is not an option (expected seed, grid, camera, fov, time, paused, look, api or size)".into(),
+                        "is not an option (expected seed, grid, camera, fov, time, paused, look, api, size, water-level, vertical-exaggeration or cell-size)".into(),
                     ));
                 }
             }
         }
         Ok(options)
     }
+}
+
+/// A finite number above 0.
+fn positive(text: &str) -> Option<f64> {
+    text.parse::<f64>().ok().filter(|value| value.is_finite() && *value > 0.0)
 }
 
 /// Decodes `%XX` escapes and `+` (a space) of a query's name or value; a malformed escape is
@@ -207,6 +239,14 @@ mod tests {
         assert_eq!(options.look, Look::Course);
         assert_eq!(options.api, BrowserApi::WebGl);
         assert_eq!(options.canvas_size, Some((640, 360)));
+        let options =
+            PageOptions::from_query("water-level=-12.5&vertical-exaggeration=3&cell-size=30").expect("valid");
+        assert_eq!(options.elevation.place.water_level, WaterLevel::Metres(-12.5));
+        assert_eq!(options.elevation.place.vertical_exaggeration, 3.0);
+        assert_eq!(options.elevation.cell_size, Some(30.0));
+        let options = PageOptions::from_query("water-level=none").expect("valid");
+        assert_eq!(options.elevation.place.water_level, WaterLevel::None);
+        assert_eq!(PageOptions::default().elevation.place, PlaceOptions::default());
     }
 
     #[test]
@@ -231,6 +271,10 @@ mod tests {
             ("size=big", "size=big"),
             ("paused=maybe", "paused=maybe"),
             ("sede=3", "sede=3"),
+            ("water-level=deep", "water-level=deep"),
+            ("vertical-exaggeration=0", "vertical-exaggeration=0"),
+            ("cell-size=-2", "cell-size=-2"),
+            ("cell-size=inf", "cell-size=inf"),
         ] {
             let error = PageOptions::from_query(query).expect_err(query);
             assert!(error.to_string().contains(&format!("`{named}`")), "{query}: {error}");

@@ -1,5 +1,6 @@
 // The page: starts the engine (WebAssembly) on the canvas, has the worker build the world
-// (so the page never freezes) and hands it over, and loads heightmap files picked or dropped.
+// (so the page never freezes) and hands it over, and loads heightmap files picked or dropped:
+// elevation data (GeoTIFF, SRTM .hgt, Esri ASCII grid, OpenEXR) or greyscale images.
 import init, { start, deliver_world, page_state, capture } from './pkg/rayterra_web.js';
 
 const $ = (id) => document.getElementById(id);
@@ -97,10 +98,11 @@ async function main() {
   const load = async (file) => {
     if (!file) return;
     const bytes = await file.arrayBuffer();
-    build({ type: 'heightmap', name: file.name, bytes, seed: options.seed }, [bytes]);
+    // The address's seed and elevation options (water-level, ...) go with it.
+    build({ type: 'heightmap', name: file.name, bytes, query: location.search }, [bytes]);
   };
   $('file').addEventListener('change', (event) => load(event.target.files[0]));
-  // A heightmap dropped anywhere on the page.
+  // A heightmap or elevation file dropped anywhere on the page.
   const hud = $('hud');
   document.body.addEventListener('dragover', (event) => {
     event.preventDefault();

@@ -8,16 +8,11 @@ self.onmessage = async ({ data }) => {
   try {
     await ready;
     const progress = (fraction, stage) => self.postMessage({ type: 'progress', fraction, stage });
-    let layers;
-    let description;
-    if (data.type === 'generate') {
-      layers = generate_world(data.seed, data.grid, progress);
-      description = `procedural island, seed ${data.seed}, ${data.grid}x${data.grid}`;
-    } else {
-      layers = heightmap_world(new Uint8Array(data.bytes), data.name, data.seed, progress);
-      const heightmap = layers.find((layer) => layer.name === 'heightmap');
-      description = `heightmap ${data.name}, ${heightmap.width}x${heightmap.height}`;
-    }
+    // The world's layers (its scene's numbers among them: elevation data brings its own sea,
+    // height mapping and camera start) and the page's line about it.
+    const { layers, description } = data.type === 'generate'
+      ? generate_world(data.seed, data.grid, progress)
+      : heightmap_world(new Uint8Array(data.bytes), data.name, data.query, progress);
     self.postMessage({ type: 'world', layers, description }, layers.map((layer) => layer.data.buffer));
   } catch (error) {
     self.postMessage({ type: 'error', message: error?.message ?? String(error) });

@@ -3,11 +3,14 @@
 // writes what it saw into --out for tests/browser.rs to check: the page's reported state, the
 // frames read back from the engine, a compositor screenshot, and the messages shown. Both looks
 // are drawn on both APIs (the course look also with `api=webgl`); without
-// either API, and with a bad address, the message must still be there seconds later.
+// either API, and with a bad address, the message must still be there seconds later. With
+// WebGPU and with WebGL2, elevation data (--dem) is then picked in the file input: the page's
+// state, frame and screenshot with it are written too, and the message for a broken elevation
+// file (--corrupt-dem).
 //
-// node browser.mjs --url http://127.0.0.1:PORT --out DIR --corrupt FILE
-import { writeFileSync } from 'node:fs';
-import { join } from 'node:path';
+// node browser.mjs --url http://127.0.0.1:PORT --out DIR --corrupt FILE --dem FILE --corrupt-dem FILE
+import { readFileSync, writeFileSync } from 'node:fs';
+import { basename, join } from 'node:path';
 import puppeteer from 'puppeteer-core';
 
 const arg = (name) => {
@@ -15,7 +18,8 @@ const arg = (name) => {
   if (at < 0 || at + 1 >= process.argv.length) throw new Error(`missing --${name}`);
   return process.argv[at + 1];
 };
-const [url, out, corrupt] = [arg('url'), arg('out'), arg('corrupt')];
+const [url, out, corrupt, dem, corruptDem] =
+  [arg('url'), arg('out'), arg('corrupt'), arg('dem'), arg('corrupt-dem')];
 
 // Quiet, offline, as root in a container.
 const common = ['--no-sandbox', '--disable-quic', '--no-first-run', '--disable-background-networking',
@@ -131,6 +135,50 @@ async function failOnce(browser, { query, world }) {
   }
 }
 
+// The page at `query` with the elevation data dropped on it once it has drawn the island (a
+// drop event carrying the file, as a file dragged from the desktop gives): its state and the
+// frame it drew with the data, written as NAME-frame.rgba.
+async function demOnce(browser, query, name) {
+  const report = { query, pageErrors: [] };
+  const page = await browser.newPage();
+  try {
+    await page.setViewport({ width: 800, height: 600 });
+    page.on('pageerror', (error) => report.pageErrors.push(error.message));
+    await page.goto(`${url}/${query}`);
+    await waitFor(page, `frames of the island (${query})`, () => {
+      const s = window.rayterra?.state?.();
+      return s && (s.error || s.frames >= 3);
+    }, 180);
+    await page.evaluate((base64, name) => {
+      const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
+      const transfer = new DataTransfer();
+      transfer.items.add(new File([bytes], name));
+      document.body.dispatchEvent(new DragEvent('dragover', { dataTransfer: transfer, bubbles: true, cancelable: true }));
+      document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: transfer, bubbles: true, cancelable: true }));
+    }, readFileSync(dem).toString('base64'), basename(dem));
+    report.state = await waitFor(page, `the elevation data to be drawn (${query})`, () => {
+      const s = window.rayterra.state();
+      const box = document.getElementById('error');
+      if (s.error || !box.hidden) return { failure: s.error ?? box.textContent };
+      if (!s.world?.startsWith('elevation data')) return null;
+      window.rayterra.demFrames ??= s.frames;
+      return s.frames >= window.rayterra.demFrames + 3 ? s : null;
+    }, 180);
+    if (!report.state.failure) report.frame = await tryCapture(page, `${name}-frame`);
+    return report;
+  } catch (error) {
+    report.failure = String(error?.stack ?? error);
+    return report;
+  } finally {
+    await page.close();
+  }
+}
+
+// Elevation data with the address's water level above its lowest ground, dropped: a lake, drawn.
+const demRuns = {
+  webgl: { 'dem-lake': '?size=640x360&paused&time=3&water-level=1500' },
+};
+
 // The course look (on WebGL2 also asked for by `api=webgl`: Chromium's WebGPU flags here leave
 // it no WebGL2).
 const lookRuns = {
@@ -161,6 +209,9 @@ async function run(mode) {
     }
     for (const [name, query] of Object.entries(lookRuns[mode])) {
       report[name] = await drawOnce(browser, query, `${mode}-${name}`);
+    }
+    for (const [name, query] of Object.entries(demRuns[mode] ?? {})) {
+      report[name] = await demOnce(browser, query, `${mode}-${name}`);
     }
     const page = await browser.newPage();
     await page.setViewport({ width: 800, height: 600 });
@@ -201,6 +252,29 @@ async function run(mode) {
     await input.uploadFile(corrupt);
     report.corrupt = await waitFor(page, 'the corrupt file to be refused', errorShown, 60);
     report.afterCorrupt = await state(page);
+    // Elevation data picked in the file input: the world, its scene and its camera start follow
+    // the file. Frames drawn with it, then the frame read back and the compositor's picture.
+    // (The corrupt file's message is still shown until the new file is read.)
+    await page.evaluate((message) => { window.rayterra.shownBefore = message; }, report.corrupt);
+    await input.uploadFile(dem);
+    const demState = await waitFor(page, 'the elevation data to be drawn', () => {
+      const s = window.rayterra.state();
+      if (s.error) return s;
+      const box = document.getElementById('error');
+      if (!box.hidden && box.textContent !== window.rayterra.shownBefore) return { failure: box.textContent };
+      if (!s.world?.startsWith('elevation data')) return null;
+      window.rayterra.demFrames ??= s.frames;
+      return s.frames >= window.rayterra.demFrames + 3 ? s : null;
+    }, 180);
+    report.dem = { state: demState, hud: await page.evaluate(() => document.getElementById('world').textContent) };
+    if (!demState.error && !demState.failure) {
+      report.dem.frame = await tryCapture(page, `${mode}-dem-frame`);
+      await canvas.screenshot({ path: join(out, `${mode}-dem-screenshot.png`) });
+    }
+    // A broken elevation file: its message, naming it; the elevation data stays drawn.
+    await input.uploadFile(corruptDem);
+    report.dem.corrupt = await waitFor(page, 'the broken elevation file to be refused', errorShown, 60);
+    report.dem.afterCorrupt = await state(page);
     return report;
   } catch (error) {
     report.failure = String(error?.stack ?? error);

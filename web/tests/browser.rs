@@ -1,6 +1,8 @@
 //! The page in a real browser: builds it (`web/build.sh`), serves it on 127.0.0.1, and has
 //! `browser.mjs` drive Debian's headless Chromium with WebGPU, with WebGL2 only, and with
-//! neither; then checks what it saw: both looks on both APIs, and messages that stay. Needs Debian's `rustc-web cargo-web rust-web-src lld-22
+//! neither; then checks what it saw: both looks on both APIs, elevation data picked in the file
+//! input drawn as the native program draws it (its scene, its camera start), and messages that
+//! stay. Needs Debian's `rustc-web cargo-web rust-web-src lld-22
 //! chromium`, `wasm-bindgen-cli` and `npm ci` in `web/tests` (as `.ci/run` installs); skipped
 //! loudly without them, except under CI.
 
@@ -12,6 +14,7 @@ use std::time::{Duration, Instant};
 use image::RgbaImage;
 use serde_json::Value;
 use terrain::render::{Backend, FrameView, Gpu};
+use terrain::world::dem;
 use terrain::world::procedural::{self, ProceduralOptions};
 use terrain::{SceneConfig, Settings};
 
@@ -123,6 +126,38 @@ fn check_layout(image: &RgbaImage, what: &str) {
     assert!(sea[2] > sea[0] && sea[1] > sea[0], "{what}: no sea at the horizon: {sea:?}");
 }
 
+/// The elevation data the page is given: the shared South Tyrol GeoTIFF (252 x 194 float32
+/// samples, 250 m apart, 445 voids, 388 to 3863 m), or where the shared data is missing (a loud
+/// skip of that file; a failure under CI) an Esri ASCII grid written here: a ridge from about
+/// 800 m up to 2.5 km (valleys below the lake run's 1500 m), 30 m cells.
+fn elevation_file(dir: &Path) -> PathBuf {
+    let shared = test_skips::shared_data(&web_dir(), "terrain-dem", "the browser test's real DEM");
+    if let Some(shared) = shared {
+        return shared.join("vinschgau_f32_lzw_utm32n_nodata.tif");
+    }
+    let (columns, rows) = (160u32, 120u32);
+    let mut text = format!(
+        "ncols {columns}\nnrows {rows}\nxllcorner 500000\nyllcorner 5000000\ncellsize 30\nNODATA_value -9999\n"
+    );
+    for row in 0..rows {
+        let line: Vec<String> = (0..columns)
+            .map(|column| {
+                let (x, y) =
+                    (f64::from(column) / f64::from(columns) - 0.5, f64::from(row) / f64::from(rows) - 0.5);
+                format!(
+                    "{:.1}",
+                    1000.0 + 1500.0 * (-(x * x * 12.0 + y * y * 3.0)).exp() + 200.0 * (x * 20.0).sin()
+                )
+            })
+            .collect();
+        text += &line.join(" ");
+        text += "\n";
+    }
+    let path = dir.join("ridge.asc");
+    std::fs::write(&path, text).expect("elevation file");
+    path
+}
+
 #[test]
 fn the_page_draws_moves_and_reports_errors_in_chromium() {
     let missing = missing_tools();
@@ -140,6 +175,18 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
     let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
     bytes.extend((0..300u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8));
     std::fs::write(&corrupt, bytes).expect("corrupt file");
+    let dem_path = elevation_file(out.path());
+    let dem_bytes = std::fs::read(&dem_path).expect("elevation data");
+    // The same file cut in half: what the native reader says of it, the page must say.
+    let corrupt_dem = out
+        .path()
+        .join(format!("cut-{}", dem_path.file_name().and_then(|name| name.to_str()).expect("a file name")));
+    std::fs::write(&corrupt_dem, &dem_bytes[..dem_bytes.len() / 2]).expect("corrupt elevation file");
+    let corrupt_dem_name = corrupt_dem.file_name().and_then(|name| name.to_str()).expect("a file name");
+    let corrupt_dem_message =
+        dem::load_bytes(&dem_bytes[..dem_bytes.len() / 2], corrupt_dem_name, &dem::LoadOptions::default())
+            .expect_err("half a file is broken")
+            .to_string();
     let status = Command::new("node")
         .arg(web_dir().join("tests/browser.mjs"))
         .args(["--url", &format!("http://127.0.0.1:{}", server.port)])
@@ -147,6 +194,10 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
         .arg(out.path())
         .arg("--corrupt")
         .arg(&corrupt)
+        .arg("--dem")
+        .arg(&dem_path)
+        .arg("--corrupt-dem")
+        .arg(&corrupt_dem)
         .current_dir(web_dir().join("tests"))
         .status()
         .expect("node runs");
@@ -163,6 +214,26 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
         terrain::headless::render_image(&gpu, &world, &config, &Settings::default(), (640, 360), &view)
             .expect("native frame");
     check_layout(&native, "native render");
+
+    // The elevation data as `rayterra terrain --heightmap FILE --screenshot` draws it: its own
+    // scene (no sea: it lies above 0 m), from its own camera start.
+    let dem_name = dem_path.file_name().and_then(|name| name.to_str()).expect("a file name");
+    let loaded = dem::load_bytes(&dem_bytes, dem_name, &dem::LoadOptions::default()).expect("elevation data");
+    let dem::DemScene { heightmap, config: dem_config, info } = loaded.scene;
+    assert!(!dem_config.sea, "the test's elevation data lies above the sea");
+    let (dem_columns, dem_rows) = (heightmap.columns(), heightmap.rows());
+    let dem_world = procedural::dress_heightmap(heightmap, 1, &dem_config, &mut |_| {});
+    let dem_view = FrameView { pose: dem_config.camera_start, ..view };
+    let dem_native = terrain::headless::render_image(
+        &gpu,
+        &dem_world,
+        &dem_config,
+        &Settings::default(),
+        (640, 360),
+        &dem_view,
+    )
+    .expect("native elevation frame");
+    assert!(mean_difference(&dem_native, &native) > 10.0, "the elevation data looks like the island");
 
     for (mode, api) in [("webgpu", "WebGPU"), ("webgl", "WebGL2")] {
         let report = read_json(&out.path().join(format!("{mode}.json")));
@@ -186,6 +257,57 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
             "{mode}: {corrupt_message}"
         );
         assert!(report["afterCorrupt"]["error"].is_null(), "{mode}: the page stopped after the bad file");
+
+        // The elevation data picked in the file input: the page reports its size, cell size and
+        // sea, draws it in its own scene and puts the camera at its start.
+        let dem_report = &report["dem"];
+        let state = &dem_report["state"];
+        assert!(state["error"].is_null() && state["failure"].is_null(), "{mode}: elevation data: {state}");
+        let world = state["world"].as_str().expect("the world's line");
+        assert!(world.starts_with(&format!("elevation data {dem_name}: ")), "{mode}: {world}");
+        assert!(world.contains("no sea"), "{mode}: {world}");
+        assert_eq!(dem_report["hud"].as_str(), Some(world), "{mode}: the page's status box");
+        let elevation = &state["elevation"];
+        assert_eq!(elevation["columns"].as_u64(), Some(u64::from(dem_columns)), "{mode}: {elevation}");
+        assert_eq!(elevation["rows"].as_u64(), Some(u64::from(dem_rows)), "{mode}: {elevation}");
+        assert_eq!(elevation["cellSize"].as_f64(), Some(info.cell_size_metres), "{mode}: {elevation}");
+        assert_eq!(elevation["sea"], false, "{mode}: {elevation}");
+        assert_eq!(elevation["voids"].as_u64(), Some(info.void_count() as u64), "{mode}: {elevation}");
+        assert_eq!(state["scene"]["sea"], false, "{mode}: the page draws a sea: {}", state["scene"]);
+        let start = dem_config.camera_start;
+        let expected =
+            [start.position.x, start.position.y, start.position.z, start.yaw_degrees, start.pitch_degrees];
+        for (what, reported) in [("scene's start", &state["scene"]["start"]), ("camera", &state["camera"])] {
+            let reported: Vec<f64> =
+                reported.as_array().expect("numbers").iter().map(|n| n.as_f64().expect("a number")).collect();
+            let close = reported.len() == 5
+                && reported.iter().zip(expected).all(|(&got, want)| (got - f64::from(want)).abs() < 1e-4);
+            assert!(close, "{mode}: the page's {what} {reported:?}, the native start {expected:?}");
+        }
+        // A broken elevation file: the native reader's message, naming it; the data stays drawn.
+        assert_eq!(dem_report["corrupt"].as_str(), Some(corrupt_dem_message.as_str()), "{mode}");
+        assert!(corrupt_dem_message.starts_with(&format!("{corrupt_dem_name}: ")), "{corrupt_dem_message}");
+        assert!(dem_report["afterCorrupt"]["error"].is_null(), "{mode}: the page stopped after the bad file");
+        assert_eq!(dem_report["afterCorrupt"]["world"].as_str(), Some(world), "{mode}");
+        let island_screenshot =
+            image::open(out.path().join(format!("{mode}-screenshot.png"))).expect("screenshot").to_rgba8();
+        let dem_screenshot = image::open(out.path().join(format!("{mode}-dem-screenshot.png")))
+            .expect("screenshot")
+            .to_rgba8();
+        let apart = mean_difference(&dem_screenshot, &island_screenshot);
+        eprintln!("{mode}: the elevation data's screenshot differs from the island's by {apart:.2}");
+        assert!(apart > 10.0, "{mode}: the screenshot with the elevation data looks like the island's");
+        if dem_report["frame"]["error"].is_string() {
+            eprintln!("{mode}: frames cannot be read back here ({})", dem_report["frame"]["error"]);
+        } else {
+            let frame = read_frame(out.path(), &format!("{mode}-dem-frame"), &dem_report["frame"]);
+            let difference = mean_difference(&frame, &dem_native);
+            eprintln!("{mode}: elevation data: mean difference from the native render {difference:.2}");
+            assert!(
+                difference < 1.0,
+                "{mode}: the page's elevation frame differs from the native render by {difference:.2}"
+            );
+        }
 
         if report["frame"]["error"].is_string() {
             // See browser.mjs: SwiftShader's WebGPU in headless Chromium cannot read frames back.
@@ -243,6 +365,42 @@ fn the_page_draws_moves_and_reports_errors_in_chromium() {
             "{what}: the frame differs from the native course render by {difference:.2}"
         );
     }
+
+    // The elevation data with the address's `water-level=1500`: a sea over its valleys, drawn as
+    // `--water-level 1500` draws it.
+    let place =
+        dem::PlaceOptions { water_level: dem::WaterLevel::Metres(1500.0), ..dem::PlaceOptions::default() };
+    let lake_options = dem::LoadOptions { place, ..dem::LoadOptions::default() };
+    let lake = dem::load_bytes(&dem_bytes, dem_name, &lake_options).expect("elevation data").scene;
+    assert!(lake.config.sea);
+    let lake_view = FrameView { pose: lake.config.camera_start, ..view };
+    let lake_world = procedural::dress_heightmap(lake.heightmap, 1, &lake.config, &mut |_| {});
+    let lake_native = terrain::headless::render_image(
+        &gpu,
+        &lake_world,
+        &lake.config,
+        &Settings::default(),
+        (640, 360),
+        &lake_view,
+    )
+    .expect("native lake frame");
+    let report = &read_json(&out.path().join("webgl.json"))["dem-lake"];
+    assert!(report["failure"].is_null(), "lake: {}", report["failure"]);
+    assert_eq!(report["pageErrors"], serde_json::json!([]), "lake: errors on the page");
+    let state = &report["state"];
+    assert!(state["failure"].is_null(), "lake: {}", state["failure"]);
+    assert_eq!(state["scene"]["sea"], true, "lake: no sea drawn: {}", state["scene"]);
+    assert_eq!(state["elevation"]["baseMetres"].as_f64(), Some(1500.0), "lake: {}", state["elevation"]);
+    let world = state["world"].as_str().expect("the world's line");
+    assert!(world.ends_with("; sea at 1500 m"), "lake: {world}");
+    assert!(report["frame"]["error"].is_null(), "lake: {}", report["frame"]["error"]);
+    let frame = read_frame(out.path(), "webgl-dem-lake-frame", &report["frame"]);
+    let difference = mean_difference(&frame, &lake_native);
+    eprintln!(
+        "webgl: elevation data with water at 1500 m: mean difference from the native render {difference:.2}"
+    );
+    assert!(difference < 1.0, "lake: the page's frame differs from the native render by {difference:.2}");
+    assert!(mean_difference(&lake_native, &dem_native) > 5.0, "the water at 1500 m changes nothing");
 
     let none = read_json(&out.path().join("none.json"));
     assert!(none["failure"].is_null(), "none: {}", none["failure"]);

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use std::cell::Cell;
 
-use terrain::camera::{FlyCamera, MotionSettings};
+use terrain::camera::{CameraPose, FlyCamera, MotionSettings};
 use terrain::controls::{self, Action};
 use terrain::headless::OffscreenTarget;
 use terrain::overlay::Overlay;
@@ -155,11 +155,28 @@ impl PageApp {
         self.drawing = Some(Drawing { gpu, surface, overlay, renderer: None });
     }
 
-    /// Takes a world the worker delivered, and makes its renderer when the GPU is open.
+    /// Takes a world the worker delivered, with its scene, and makes its renderer when the GPU
+    /// is open. The first world keeps the address's camera; a later one (a file) puts the
+    /// camera at its own start, which for elevation data suits the data's heights.
     fn take_world(&mut self) {
-        if let Some((world, description)) = take_delivered() {
+        if let Some(super::Delivered { world, config, description }) = take_delivered() {
             page::set_text("world", &description);
-            report(|state| state.world = Some(description));
+            let elevation =
+                world.elevation.clone().map(|info| (info, world.heightmap.columns(), world.heightmap.rows()));
+            if self.world.is_some() {
+                let start = config.camera_start;
+                let ground = |x, z| height_under(&world.heightmap, &config, x, z);
+                let position = config.camera_limits().clamp(start.position, ground);
+                let pose = CameraPose::new(position, start.yaw_degrees, start.pitch_degrees);
+                self.camera =
+                    FlyCamera::new(pose, self.camera.field_of_view_degrees(), MotionSettings::default());
+            }
+            report(|state| {
+                state.world = Some(description);
+                state.scene = Some(config.clone());
+                state.elevation = elevation;
+            });
+            self.config = config;
             self.world = Some(world);
             if let Some(drawing) = &mut self.drawing {
                 drawing.renderer = None;

@@ -1,8 +1,9 @@
 //! [`Layer`]s as JavaScript objects, `{ name, width, height, kind, data }` with `data` a typed
-//! array (`Uint8Array` for `rgba`, `Float32Array` for `levels`, `Uint16Array` for `sixteen`),
-//! whose buffers the worker hands to the page without copying.
+//! array (`Uint8Array` for `rgba` and `mask`, `Float32Array` for `levels`, `Uint16Array` for
+//! `sixteen`, `Float64Array` for `numbers`), whose buffers the worker hands to the page without
+//! copying.
 
-use js_sys::{Array, Float32Array, Object, Reflect, Uint8Array, Uint16Array};
+use js_sys::{Array, Float32Array, Float64Array, Object, Reflect, Uint8Array, Uint16Array};
 use wasm_bindgen::{JsCast, JsValue};
 
 use crate::transfer::{Layer, LayerData};
@@ -16,6 +17,8 @@ pub(super) fn to_js(layers: Vec<Layer>) -> Array {
             LayerData::Rgba(bytes) => ("rgba", Uint8Array::from(bytes.as_slice()).into()),
             LayerData::Levels(levels) => ("levels", Float32Array::from(levels.as_slice()).into()),
             LayerData::Sixteen(values) => ("sixteen", Uint16Array::from(values.as_slice()).into()),
+            LayerData::Numbers(numbers) => ("numbers", Float64Array::from(numbers.as_slice()).into()),
+            LayerData::Mask(mask) => ("mask", Uint8Array::from(mask.as_slice()).into()),
         };
         for (key, value) in [
             ("name", JsValue::from(layer.name.as_str())),
@@ -49,6 +52,8 @@ pub(super) fn from_js(array: &Array) -> Result<Vec<Layer>, String> {
                 Some("rgba") => data.dyn_into::<Uint8Array>().map(|a| LayerData::Rgba(a.to_vec())),
                 Some("levels") => data.dyn_into::<Float32Array>().map(|a| LayerData::Levels(a.to_vec())),
                 Some("sixteen") => data.dyn_into::<Uint16Array>().map(|a| LayerData::Sixteen(a.to_vec())),
+                Some("numbers") => data.dyn_into::<Float64Array>().map(|a| LayerData::Numbers(a.to_vec())),
+                Some("mask") => data.dyn_into::<Uint8Array>().map(|a| LayerData::Mask(a.to_vec())),
                 _ => return Err(format!("the world layer `{name}` is of no known kind")),
             }
             .map_err(|_| format!("the world layer `{name}` holds the wrong kind of array"))?;

@@ -1,9 +1,11 @@
 //! The page (WebAssembly only): what `index.html`'s scripts call.
 //!
 //! - On the page: [`start`] opens the winit app on the canvas (`app`), [`deliver_world`] hands
-//!   it a world, [`page_state`] tells what it is doing (for people and for the browser test).
+//!   it a world with its scene, [`page_state`] tells what it is doing (for people and for the
+//!   browser test).
 //! - In the worker (`worker.js`): [`generate_world`] and [`heightmap_world`] build a world
-//!   without freezing the page, reporting progress, and return it as transferable layers.
+//!   without freezing the page, reporting progress, and return it as transferable layers (the
+//!   scene's numbers among them: a world from elevation data brings its own).
 
 mod app;
 mod layers;
@@ -13,13 +15,14 @@ use std::cell::RefCell;
 
 use js_sys::{Array, Function, Object, Reflect};
 use terrain::SceneConfig;
-use terrain::world::procedural::{self, ProceduralOptions, Progress, Stage};
-use terrain::world::{Heightmap, World};
+use terrain::world::World;
+use terrain::world::procedural::{self, ProceduralOptions, Progress};
 use wasm_bindgen::prelude::*;
 use winit::event_loop::EventLoop;
 use winit::platform::web::EventLoopExtWebSys;
 
 use crate::address::{MAX_PAGE_SIDE, PageOptions};
+use crate::file_world::world_from_file;
 use crate::transfer::{world_from_layers, world_into_layers};
 
 /// What the app reports, read by [`page_state`].
@@ -35,14 +38,19 @@ struct PageState {
     camera: [f32; 5],
     /// The world drawn, e.g. `procedural island, seed 1, 512x512`.
     world: Option<String>,
+    /// The scene of the world drawn (its sea, camera start, height mapping).
+    scene: Option<SceneConfig>,
+    /// What the world drawn knows of its elevation data, with its heightmap's size, if it was
+    /// made from some.
+    elevation: Option<(terrain::world::dem::place::ElevationInfo, u32, u32)>,
     /// Why the page stopped, if it did.
     error: Option<String>,
 }
 
 thread_local! {
     static STATE: RefCell<PageState> = RefCell::new(PageState::default());
-    /// A world handed over by [`deliver_world`], not yet taken by the app.
-    static INBOX: RefCell<Option<(World, String)>> = const { RefCell::new(None) };
+    /// A world handed over by [`deliver_world`], with its scene, not yet taken by the app.
+    static INBOX: RefCell<Option<Delivered>> = const { RefCell::new(None) };
     /// The promises of [`capture`] calls, not yet answered: resolve and reject.
     static CAPTURES: RefCell<Vec<(Function, Function)>> = const { RefCell::new(Vec::new()) };
 }
@@ -134,38 +142,93 @@ pub fn start(query: &str) -> Result<Object, JsError> {
     Ok(answer)
 }
 
-/// Hands the app a world (layers from the worker) described as `description`.
+/// A world the worker built, put back together on the page.
+struct Delivered {
+    world: World,
+    /// The scene it is drawn in.
+    config: SceneConfig,
+    /// What the page says of it.
+    description: String,
+}
+
+/// Hands the app a world (layers from the worker, the scene's numbers among them) described as
+/// `description`.
 #[wasm_bindgen]
 pub fn deliver_world(layers: &Array, description: &str) -> Result<(), JsError> {
     let layers = layers::from_js(layers).map_err(|message| JsError::new(&message))?;
-    let world = world_from_layers(layers).map_err(|error| JsError::new(&error.to_string()))?;
-    INBOX.with(|inbox| *inbox.borrow_mut() = Some((world, description.to_string())));
+    let (world, config) = world_from_layers(layers).map_err(|error| JsError::new(&error.to_string()))?;
+    let description = description.to_string();
+    INBOX.with(|inbox| *inbox.borrow_mut() = Some(Delivered { world, config, description }));
     Ok(())
 }
 
 /// The world handed over since the last call, if any.
-fn take_delivered() -> Option<(World, String)> {
+fn take_delivered() -> Option<Delivered> {
     INBOX.with(|inbox| inbox.borrow_mut().take())
 }
 
+/// An object of numbers and other values.
+fn object_of(entries: &[(&str, JsValue)]) -> Object {
+    let object = Object::new();
+    for (key, value) in entries {
+        let _ = Reflect::set(&object, &(*key).into(), value);
+    }
+    object
+}
+
+fn numbers(values: &[f32]) -> JsValue {
+    values.iter().map(|&value| JsValue::from(value)).collect::<Array>().into()
+}
+
 /// What the page is doing: `{ api, adapter, frames, camera: [x, y, z, yaw, pitch], world,
-/// error }` (`null` where not known yet).
+/// scene, elevation, error }` (`null` where not known yet). `scene` is the drawn world's
+/// `{ sea, start: [x, y, z, yaw, pitch], unitHeight, levelOffset }` (world units, degrees);
+/// `elevation`, for a world made from elevation data, is `{ columns, rows, cellSize, low, high,
+/// sea, baseMetres, voids }` (the heightmap drawn, in samples; metres; `voids` counts its samples
+/// that were voids, filled), `null` otherwise.
 #[wasm_bindgen]
 pub fn page_state() -> Object {
     let state = STATE.with(|state| state.borrow().clone());
-    let object = Object::new();
-    let camera: Array = state.camera.iter().map(|&value| JsValue::from(value)).collect();
-    for (key, value) in [
+    let scene = state.scene.map_or(JsValue::NULL, |config| {
+        let pose = config.camera_start;
+        let start = [pose.position.x, pose.position.y, pose.position.z, pose.yaw_degrees, pose.pitch_degrees];
+        object_of(&[
+            ("sea", config.sea.into()),
+            ("start", numbers(&start)),
+            ("unitHeight", config.unit_height.into()),
+            ("levelOffset", config.level_offset.into()),
+        ])
+        .into()
+    });
+    let elevation = state.elevation.map_or(JsValue::NULL, |(info, columns, rows)| {
+        object_of(&[
+            ("columns", columns.into()),
+            ("rows", rows.into()),
+            ("cellSize", info.cell_size_metres.into()),
+            ("low", info.range_metres.0.into()),
+            ("high", info.range_metres.1.into()),
+            ("sea", info.sea.into()),
+            ("baseMetres", info.base_metres.into()),
+            ("voids", (info.void_count() as f64).into()),
+        ])
+        .into()
+    });
+    object_of(&[
         ("api", state.api.map_or(JsValue::NULL, JsValue::from)),
         ("adapter", state.adapter.map_or(JsValue::NULL, JsValue::from)),
         ("frames", JsValue::from(state.frames as f64)),
-        ("camera", camera.into()),
+        ("camera", numbers(&state.camera)),
         ("world", state.world.map_or(JsValue::NULL, JsValue::from)),
+        ("scene", scene),
+        ("elevation", elevation),
         ("error", state.error.map_or(JsValue::NULL, JsValue::from)),
-    ] {
-        let _ = Reflect::set(&object, &key.into(), &value);
-    }
-    object
+    ])
+}
+
+/// A world's layers and the page's line about it, as the worker hands them over:
+/// `{ layers, description }`.
+fn built(layers: Array, description: &str) -> Object {
+    object_of(&[("layers", layers.into()), ("description", description.into())])
 }
 
 /// Calls `progress(fraction, stage)` from the worker (fraction of the whole world, 0 to 1).
@@ -182,9 +245,9 @@ fn progress_to(callback: &Function) -> impl FnMut(Progress) + '_ {
 }
 
 /// Generates the procedural world of `seed` with a `grid` x `grid` heightmap (in the worker),
-/// calling `progress(fraction, stage)` as it goes. Returns its layers.
+/// calling `progress(fraction, stage)` as it goes. Returns `{ layers, description }`.
 #[wasm_bindgen]
-pub fn generate_world(seed: u32, grid: u32, progress: &Function) -> Result<Array, JsError> {
+pub fn generate_world(seed: u32, grid: u32, progress: &Function) -> Result<Object, JsError> {
     install_panic_hook();
     if !(2..=MAX_PAGE_SIDE).contains(&grid) {
         return Err(JsError::new(&format!(
@@ -192,26 +255,29 @@ pub fn generate_world(seed: u32, grid: u32, progress: &Function) -> Result<Array
         )));
     }
     let options = ProceduralOptions { seed, heightmap_size: grid };
-    let world = procedural::generate(options, &SceneConfig::default(), &mut progress_to(progress))
+    let config = SceneConfig::default();
+    let world = procedural::generate(options, &config, &mut progress_to(progress))
         .map_err(|error| JsError::new(&error.to_string()))?;
-    Ok(layers::to_js(world_into_layers(world)))
+    let description = format!("procedural island, seed {seed}, {grid}x{grid}");
+    Ok(built(layers::to_js(world_into_layers(world, &config)), &description))
 }
 
-/// Builds a world around the heightmap image `bytes` (8- or 16-bit PNG, BMP, ...) named `name`,
-/// with the textures of `seed` (in the worker). A file that is not a usable heightmap is an
-/// error naming it.
+/// Builds the world of the file `bytes` named `name` (in the worker) as `rayterra terrain
+/// --heightmap` does: elevation data (GeoTIFF, SRTM .hgt, Esri ASCII grid, OpenEXR) with its own
+/// scene, placed with the address's `water-level`, `vertical-exaggeration` and `cell-size`, or
+/// a heightmap image (8- or 16-bit PNG, BMP, ...), with the textures of the address's `seed`
+/// (`query` is the page's address query). Returns `{ layers, description }`; a file that is not
+/// a usable heightmap is an error naming it.
 #[wasm_bindgen]
-pub fn heightmap_world(bytes: &[u8], name: &str, seed: u32, progress: &Function) -> Result<Array, JsError> {
+pub fn heightmap_world(
+    bytes: &[u8],
+    name: &str,
+    query: &str,
+    progress: &Function,
+) -> Result<Object, JsError> {
     install_panic_hook();
-    let mut progress = progress_to(progress);
-    progress(Progress { stage: Stage::Heightmap, done: 0.0 });
-    let heightmap = Heightmap::decode(bytes, name).map_err(|error| JsError::new(&error.to_string()))?;
-    let (columns, rows) = (heightmap.columns(), heightmap.rows());
-    if columns.max(rows) > MAX_PAGE_SIDE {
-        return Err(JsError::new(&format!(
-            "{name} is {columns}x{rows} samples; the page takes heightmaps up to {MAX_PAGE_SIDE} a side (the `rayterra terrain` program takes up to 8193)"
-        )));
-    }
-    let world = procedural::dress_heightmap(heightmap, seed, &SceneConfig::default(), &mut progress);
-    Ok(layers::to_js(world_into_layers(world)))
+    let options = PageOptions::from_query(query).map_err(|error| JsError::new(&error.to_string()))?;
+    let loaded = world_from_file(bytes, name, options.seed, &options.elevation, &mut progress_to(progress))
+        .map_err(|message| JsError::new(&message))?;
+    Ok(built(layers::to_js(world_into_layers(loaded.world, &loaded.config)), &loaded.description))
 }
