@@ -33,7 +33,7 @@ pub struct MeshRay {
 
 impl MeshRay {
     /// The single-precision form of `ray`.
-    #[inline]
+    #[inline(always)]
     pub fn new(ray: &Ray) -> MeshRay {
         let origin = [ray.origin.x as f32, ray.origin.y as f32, ray.origin.z as f32];
         let dir = [ray.dir.x as f32, ray.dir.y as f32, ray.dir.z as f32];
@@ -42,24 +42,24 @@ impl MeshRay {
 
     /// A ray from single-precision numbers (the direction need not be a unit vector: distances
     /// are then in units of its length).
-    #[inline]
+    // Always inlined: called apart, its arrays went through memory as 4-byte stores read back
+    // as wider loads, which stall (a tenth of `cbox.xml`'s time, measured with `perf`).
+    #[inline(always)]
     pub fn from_f32(origin: [f32; 3], dir: [f32; 3]) -> MeshRay {
         let [kx, ky, kz] = super::triangle::axis_permutation(dir.map(f64::from));
+        let boxes = BoxRay::from_f32(origin, dir);
+        // The shear `[d_kx / d_kz, d_ky / d_kz, 1 / d_kz]` from the box test's reciprocal (the
+        // dominant component `d_kz` is never replaced there: it is far from zero), without a
+        // second division. Every triangle a ray meets is tested in the same sheared frame,
+        // which is what keeps the test watertight.
+        let inv_z = boxes.inv_dir[kz];
         MeshRay {
-            boxes: BoxRay::from_f32(origin, dir),
+            boxes,
             k: [kx, ky, kz],
-            shear: shear(dir, [kx, ky, kz]).map(f32x4::from),
+            shear: [dir[kx] * inv_z, dir[ky] * inv_z, inv_z].map(f32x4::from),
             origin: [origin[kx], origin[ky], origin[kz]].map(f32x4::from),
         }
     }
-}
-
-/// The shear of the watertight test, `[d_kx / d_kz, d_ky / d_kz, 1 / d_kz]`, in one 4-lane
-/// division (the same quotients as three).
-#[inline(always)]
-fn shear(dir: [f32; 3], [kx, ky, kz]: [usize; 3]) -> [f32; 3] {
-    let [x, y, z, _] = (f32x4::from([dir[kx], dir[ky], 1.0, 1.0]) / f32x4::from(dir[kz])).to_array();
-    [x, y, z]
 }
 
 /// Four triangles' corners, in structure-of-arrays form: `v[corner][axis][lane]`; NaN in unused
@@ -93,7 +93,7 @@ impl TriangleSet {
             let c = corners(i);
             if degenerate(&c) { Box32::EMPTY } else { Box32::around(&c) }
         };
-        let mut bvh = WideBvh::build_with(count, triangle_box, BuildParams::TRIANGLES);
+        let mut bvh = WideBvh::build_with(count, triangle_box, BuildParams::triangles(count));
         // Pack each leaf's triangles into packets of four, in leaf order.
         let order = bvh.order().to_vec();
         let mut packets = Vec::with_capacity(order.len() / 3 + 1);

@@ -248,7 +248,8 @@ impl<'s> Emitters<'s> {
     /// direction on it. `None` when nothing emits towards `p`.
     pub fn sample(&self, p: DVec3, u: f64, u1: f64, u2: f64) -> Option<EmitterSample> {
         let (index, choice) = self.choose.sample(u)?;
-        let far = 2.0 * self.radius + (p - self.scene.scene.camera.eye).length();
+        // Beyond the scene from `p`, for the emitters at infinity (the others need no square root).
+        let far = || 2.0 * self.radius + (p - self.scene.scene.camera.eye).length();
         match &self.scene.scene.emitters[index] {
             Emitter::Area { radiance, primitive } => match self.shapes[index].as_ref()? {
                 AreaShape::Mesh { mesh, triangles, area } => {
@@ -378,7 +379,7 @@ impl<'s> Emitters<'s> {
                 let wi = -*direction;
                 Some(EmitterSample {
                     wi,
-                    target: p + wi * far,
+                    target: p + wi * far(),
                     radiance: *irradiance,
                     pdf: choice,
                     delta: true,
@@ -389,7 +390,7 @@ impl<'s> Emitters<'s> {
                 let wi = crate::base::sampling::uniform_sphere(u1, u2);
                 Some(EmitterSample {
                     wi,
-                    target: p + wi * far,
+                    target: p + wi * far(),
                     radiance: *radiance,
                     pdf: choice / (4.0 * PI),
                     delta: false,
@@ -401,7 +402,7 @@ impl<'s> Emitters<'s> {
                 let (wi, pdf) = d.sample(m, u1, u2)?;
                 Some(EmitterSample {
                     wi,
-                    target: p + wi * far,
+                    target: p + wi * far(),
                     radiance: m.radiance(wi),
                     pdf: choice * pdf,
                     delta: false,

@@ -18,23 +18,52 @@ pub struct Halves {
     pub height: u32,
     /// Per pixel and channel: the mean of the halves.
     pub mean: Vec<[f64; 3]>,
-    /// Per pixel and channel: the squared half-difference, an unbiased estimate of the variance
-    /// of `mean`.
-    pub variance: Vec<[f64; 3]>,
+    /// Per pixel and channel: half the difference of the halves, whose square is an unbiased
+    /// estimate of the variance of `mean`, and whose products between neighbours estimate their
+    /// covariance.
+    pub half_difference: Vec<[f64; 3]>,
 }
+
+/// How far apart (in pixels, on each axis) two pixels of a render can share samples: Mitsuba
+/// splats a sample into every pixel its reconstruction filter reaches (the default Gaussian's
+/// radius is 2 pixels), so its neighbouring pixels' noise is correlated. rayterra samples the
+/// filter instead (a sample lands in one pixel), so its covariances are zero in expectation.
+pub const FILTER_REACH: i64 = 2;
 
 impl Halves {
     /// Combines two renders of equal size.
     pub fn new(a: &Image, b: &Image) -> Halves {
         assert_eq!((a.width(), a.height()), (b.width(), b.height()));
-        let (mut mean, mut variance) = (Vec::new(), Vec::new());
+        let (mut mean, mut half_difference) = (Vec::new(), Vec::new());
         for (p, q) in a.pixels().iter().zip(b.pixels()) {
-            let m: [f64; 3] = std::array::from_fn(|c| (p[c] as f64 + q[c] as f64) / 2.0);
-            let v: [f64; 3] = std::array::from_fn(|c| ((p[c] as f64 - q[c] as f64) / 2.0).powi(2));
-            mean.push(m);
-            variance.push(v);
+            mean.push(std::array::from_fn(|c| (p[c] as f64 + q[c] as f64) / 2.0));
+            half_difference.push(std::array::from_fn(|c| (p[c] as f64 - q[c] as f64) / 2.0));
         }
-        Halves { width: a.width(), height: a.height(), mean, variance }
+        Halves { width: a.width(), height: a.height(), mean, half_difference }
+    }
+
+    /// The variance of the sum of `mean` over the pixels `x0..x1` x `y0..y1` in channel `c`:
+    /// every pixel's variance plus the covariances of the pairs at most [`FILTER_REACH`] apart
+    /// (estimated by the products of their half-differences; pixels farther apart share no
+    /// sample). Summing the variances alone would take a splatting renderer's image for less
+    /// noisy than it is. Never less than the variances' sum: the covariances' estimate is noisy,
+    /// and a negative one would only make the comparison stricter by chance.
+    pub fn variance_of_sum(&self, (x0, x1): (u32, u32), (y0, y1): (u32, u32), c: usize) -> f64 {
+        let d = |x: i64, y: i64| self.half_difference[(y * self.width as i64 + x) as usize][c];
+        let (x0, x1, y0, y1) = (x0 as i64, x1 as i64, y0 as i64, y1 as i64);
+        let (mut diagonal, mut all) = (0.0, 0.0);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let here = d(x, y);
+                diagonal += here * here;
+                for ny in (y - FILTER_REACH).max(y0)..(y + FILTER_REACH + 1).min(y1) {
+                    for nx in (x - FILTER_REACH).max(x0)..(x + FILTER_REACH + 1).min(x1) {
+                        all += here * d(nx, ny);
+                    }
+                }
+            }
+        }
+        all.max(diagonal)
     }
 }
 
@@ -180,15 +209,16 @@ pub fn compare(
                 continue;
             }
             for c in 0..3 {
-                let (mut a, mut b, mut var) = (0.0, 0.0, 0.0);
-                for y in by * block..(by + 1) * block {
-                    for x in bx * block..(bx + 1) * block {
+                let (mut a, mut b) = (0.0, 0.0);
+                let (xs, ys) = ((bx * block, (bx + 1) * block), (by * block, (by + 1) * block));
+                for y in ys.0..ys.1 {
+                    for x in xs.0..xs.1 {
                         let i = (y * w + x) as usize;
                         a += ours.mean[i][c];
                         b += reference.mean[i][c];
-                        var += ours.variance[i][c] + reference.variance[i][c];
                     }
                 }
+                let var = ours.variance_of_sum(xs, ys, c) + reference.variance_of_sum(xs, ys, c);
                 let n = (block * block) as f64;
                 let (a, b, sigma) = (a / n, b / n, var.sqrt() / n);
                 let diff = (a - b).abs();
