@@ -28,6 +28,8 @@ use std::f64::consts::{FRAC_1_PI, PI};
 
 use glam::DVec3;
 
+use crate::base::color::channel_mean;
+
 use crate::base::sampling::{cosine_hemisphere_pdf, orthonormal_basis};
 use crate::material::CourseMaterial;
 use crate::prepare::Interaction;
@@ -153,7 +155,7 @@ impl Bsdf {
             0.0
         };
         let (t, b) = orthonormal_basis(at.normal);
-        let choose = tint.map(mean);
+        let choose = tint.map(channel_mean);
         let classes =
             std::array::from_fn(|l| if choose[l] > 0.0 { class_of(l, refl_alpha > 0.0) } else { 0 });
         Bsdf { n: at.normal, t, b, tint, refl_alpha, eta, choose, classes }
@@ -377,12 +379,6 @@ impl Bsdf {
             eta_scale: self.eta * self.eta,
         }
     }
-}
-
-/// The mean of the channels.
-#[inline]
-fn mean(c: DVec3) -> f64 {
-    (c.x + c.y + c.z) / 3.0
 }
 
 /// The sine and cosine of `2 pi u`, in single precision (ample for a sampled direction, and

@@ -19,6 +19,8 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use crate::base::color::channel_mean;
+
 use crate::base::sampling::{Discrete, sphere_cone, sphere_cone_pdf};
 use crate::geometry::{Bounds, MESH_ERROR_SCALE, Ray, SPAWN_OFFSET, Shape, ShapePart, TriangleMesh};
 use crate::light::Emitter;
@@ -92,12 +94,6 @@ pub struct Emitters<'s> {
     radius: f64,
 }
 
-/// Mean of the channels.
-#[inline]
-fn mean(c: DVec3) -> f64 {
-    (c.x + c.y + c.z) / 3.0
-}
-
 impl<'s> Emitters<'s> {
     /// The emitters of `scene`, chosen in proportion to their estimated power.
     pub fn new(scene: &'s PreparedScene) -> Emitters<'s> {
@@ -148,14 +144,14 @@ impl<'s> Emitters<'s> {
                     ),
                     _ => (None, 0.0),
                 },
-                Emitter::Point { intensity, .. } => (None, 4.0 * PI * mean(*intensity)),
+                Emitter::Point { intensity, .. } => (None, 4.0 * PI * channel_mean(*intensity)),
                 Emitter::Spot { intensity, cos_cutoff, cos_beam, .. } => {
-                    (None, TAU * (1.0 - 0.5 * (cos_cutoff + cos_beam)) * mean(*intensity))
+                    (None, TAU * (1.0 - 0.5 * (cos_cutoff + cos_beam)) * channel_mean(*intensity))
                 }
                 Emitter::Projector { irradiance, scale, tan_half, fov_axis, .. } => {
                     // Mitsuba's `resolution()`: the bitmap's, (1, 1) for anything else.
                     let ((w, h), mean_e) = match irradiance {
-                        Param::Constant(c) => ((1, 1), mean(*c)),
+                        Param::Constant(c) => ((1, 1), channel_mean(*c)),
                         Param::Texture(t) => (scene.texture_resolution(t), texture_mean(scene, t)),
                     };
                     let aspect = w as f64 / h.max(1) as f64;
@@ -164,10 +160,10 @@ impl<'s> Emitters<'s> {
                     // The flux through the image plane at distance 1: pi scale E over its area.
                     (None, PI * scale.abs() * mean_e.max(0.0) * 4.0 * tan_x * tan_x / aspect)
                 }
-                Emitter::Directional { irradiance, .. } => (None, disc * mean(*irradiance)),
+                Emitter::Directional { irradiance, .. } => (None, disc * channel_mean(*irradiance)),
                 Emitter::Constant { radiance } => {
                     environment = Some(i as u32);
-                    (None, disc * 4.0 * PI * mean(*radiance))
+                    (None, disc * 4.0 * PI * channel_mean(*radiance))
                 }
                 Emitter::Environment { .. } => {
                     environment = Some(i as u32);
@@ -476,7 +472,7 @@ impl MapDistribution {
 /// attribute) or not positive (so that a textured light is still chosen).
 fn mean_radiance(scene: &PreparedScene, radiance: &Param) -> f64 {
     match radiance {
-        Param::Constant(c) => mean(*c),
+        Param::Constant(c) => channel_mean(*c),
         Param::Texture(t) => {
             let m = texture_mean(scene, t);
             if m > 0.0 && m.is_finite() { m } else { 1.0 }
@@ -492,7 +488,7 @@ fn texture_mean(scene: &PreparedScene, t: &Arc<TextureSpec>) -> f64 {
     for j in 0..n {
         for i in 0..n {
             let (u, v) = ((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
-            sum += mean(scene.texture_at(t, u, v));
+            sum += channel_mean(scene.texture_at(t, u, v));
         }
     }
     sum / (n * n) as f64

@@ -23,6 +23,8 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
+use crate::base::color::channel_mean;
+
 use crate::base::sampler::PixelRng;
 use crate::base::sampling::{Discrete, cosine_hemisphere, sphere_cone, sphere_cone_pdf, uniform_sphere};
 use crate::geometry::{Bounds, Ray, Shape, offset_origin};
@@ -78,7 +80,7 @@ pub struct Lights<'s> {
 
 /// The power (mean over channels) of each light, in the order of the scene's lights.
 pub fn light_powers(scene: &Scene) -> Vec<f64> {
-    scene.lights.iter().map(|l| mean(l.color().max(DVec3::ZERO)) * power_factor(l)).collect()
+    scene.lights.iter().map(|l| channel_mean(l.color().max(DVec3::ZERO)) * power_factor(l)).collect()
 }
 
 /// Power over the radiance (or intensity) of a light.
@@ -92,11 +94,6 @@ fn power_factor(light: &Light) -> f64 {
 
 fn square_area(dx: &DVec3, dy: &DVec3) -> f64 {
     4.0 * dx.cross(*dy).length()
-}
-
-#[inline]
-fn mean(c: DVec3) -> f64 {
-    (c.x + c.y + c.z) / 3.0
 }
 
 impl<'s> Lights<'s> {
@@ -122,7 +119,7 @@ impl<'s> Lights<'s> {
         }
         let centre = b.centroid();
         let radius = ((b.max - b.min).length() * 0.5).max(1e-3);
-        let env_power = PI * radius * radius * 4.0 * PI * mean(environment_mean(s));
+        let env_power = PI * radius * radius * 4.0 * PI * channel_mean(environment_mean(s));
         let mut emission_weights = powers.clone();
         emission_weights.push(env_power);
         let areas = s
