@@ -17,6 +17,7 @@ use image::RgbaImage;
 use rayon::prelude::*;
 
 use super::ground::ground_map;
+use super::procedural::smoothstep_f32;
 use super::{Heightfield, World};
 use crate::config::SceneConfig;
 
@@ -51,12 +52,6 @@ impl GroundLines {
     }
 }
 
-/// WGSL's `smoothstep` (for `edge0 < edge1`).
-fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
-    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
-}
-
 /// The five weights ([`MATERIALS`]' order) at a point with the unit `normal` (y-up), the
 /// `curvature` (-1 ridge to 1 hollow, the shape map's scale), the world `height`, and `broad`
 /// (the detail map's green, 0 to 1): the shader's shares, grass taking the rest, normalised to
@@ -64,15 +59,19 @@ fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
 pub fn weights(normal: Vec3, curvature: f32, height: f32, broad: f32, lines: &GroundLines) -> [f32; 5] {
     let slope = 1.0 - normal.y;
     let (rs, top) = (lines.rock_slope, lines.top);
-    let rock = smoothstep(rs * 0.85, rs * 1.15, slope + 0.12 * rs * (broad - 0.5));
-    let scree = smoothstep(rs * 0.35, rs * 0.7, slope) * smoothstep(-0.05, 0.35, curvature) * (1.0 - rock);
+    let rock = smoothstep_f32(rs * 0.85, rs * 1.15, slope + 0.12 * rs * (broad - 0.5));
+    let scree =
+        smoothstep_f32(rs * 0.35, rs * 0.7, slope) * smoothstep_f32(-0.05, 0.35, curvature) * (1.0 - rock);
     let band = 0.3 * lines.sand_line.abs() + 1e-4;
-    let sand = (1.0
-        - smoothstep(lines.sand_line - band, lines.sand_line + band, height + 0.02 * top * (broad - 0.5)))
-        * (1.0 - smoothstep(0.1, 0.25, slope));
+    let sand =
+        (1.0 - smoothstep_f32(
+            lines.sand_line - band,
+            lines.sand_line + band,
+            height + 0.02 * top * (broad - 0.5),
+        )) * (1.0 - smoothstep_f32(0.1, 0.25, slope));
     let line = lines.snow_line + 0.12 * top * normal.z + 0.08 * top * (broad - 0.5);
-    let snow = smoothstep(line - 0.03 * top, line + 0.03 * top, height)
-        * (1.0 - smoothstep(rs * 1.1, rs * 1.6, slope));
+    let snow = smoothstep_f32(line - 0.03 * top, line + 0.03 * top, height)
+        * (1.0 - smoothstep_f32(rs * 1.1, rs * 1.6, slope));
     let rock = rock * (1.0 - snow);
     let scree = scree * (1.0 - snow);
     let sand = sand * (1.0 - rock) * (1.0 - snow);

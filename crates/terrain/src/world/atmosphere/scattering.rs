@@ -16,6 +16,8 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec3};
 
+use crate::world::procedural::smoothstep_f32;
+
 /// The sky-view table's width: the view's azimuth from the sun's, 0 to 180 degrees (the sky is
 /// symmetric about the sun's vertical plane).
 pub const SKY_VIEW_WIDTH: u32 = 64;
@@ -293,11 +295,11 @@ impl Atmosphere {
         // Twilight: the eye opens up as the light fades (the night's own light is not adapted).
         let adaptation = (ADAPTED_LUMINANCE / luminance(day_sky).max(1e-9)).sqrt().clamp(1.0, MAX_ADAPTATION);
         let gain = adaptation * exposure;
-        let night = smoothstep(MOON_TAKES_OVER_DEGREES, -12.0, elevation);
+        let night = smoothstep_f32(MOON_TAKES_OVER_DEGREES, -12.0, elevation);
         let night_sky = Vec3::from_array(NIGHT_SKY) * night;
         let sky_light = day_sky * gain + night_sky;
         // The sun's light through the air, fading as its disc sinks below the horizon.
-        let visible = smoothstep(-SUN_RADIUS_DEGREES, SUN_RADIUS_DEGREES, elevation);
+        let visible = smoothstep_f32(-SUN_RADIUS_DEGREES, SUN_RADIUS_DEGREES, elevation);
         let through = self.transmittance(OBSERVER_ALTITUDE, f64::from(sun.y)).as_vec3();
         let sun_colour = through * gain * visible;
         let texels = linear
@@ -344,11 +346,6 @@ fn row_edge(row: u32) -> f32 {
 /// The azimuth from the sun's (radians) at the centre of a sky-view column.
 fn column_azimuth(column: u32) -> f32 {
     (column as f32 + 0.5) / SKY_VIEW_WIDTH as f32 * std::f32::consts::PI
-}
-
-fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
-    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 #[cfg(test)]

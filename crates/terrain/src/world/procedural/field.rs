@@ -42,6 +42,13 @@ pub fn smoothstep(edge0: f64, edge1: f64, x: f64) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// [`smoothstep`] in single precision, as WGSL's `smoothstep` computes it (edges in either order):
+/// for the CPU copies of the shaders' arithmetic (the sky's tables, the ground's splat weights).
+pub fn smoothstep_f32(edge0: f32, edge1: f32, x: f32) -> f32 {
+    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
 /// Linear blend of colours: `a` at t = 0, `b` at t = 1.
 pub fn mix(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
     [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t]

@@ -12,6 +12,7 @@ mod waves;
 
 pub use colour::{MAX_COLOUR_MAP_SIDE, colour_map, colour_map_size, colour_maps};
 pub use detail::detail_map;
+pub use field::smoothstep_f32;
 pub use island::{EXACT_SIDE, island_heightmap};
 pub use sky::{sky_box, sky_boxes};
 pub use water::water_texture;
