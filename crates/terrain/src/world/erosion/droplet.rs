@@ -165,61 +165,89 @@ impl Tile {
         }
     }
 
-    /// Height and gradient at (`x`, `y`), bilinear over the cell it lies in.
-    fn sample(&self, x: f32, y: f32) -> (f32, f32, f32) {
-        let (cx, cy) = ((x as usize).min(self.width - 2), (y as usize).min(self.height - 2));
-        let (u, v) = (x - cx as f32, y - cy as f32);
-        let i = cy * self.width + cx;
-        let (nw, ne) = (self.heights[i], self.heights[i + 1]);
-        let (sw, se) = (self.heights[i + self.width], self.heights[i + self.width + 1]);
+    /// Where (`x`, `y`) lies: the cell (the last one for a point on the far edges) and the
+    /// point's offsets in it. `x` and `y` are inside the tile (0 to width - 1, 0 to height - 1).
+    #[inline]
+    fn spot(&self, x: f32, y: f32) -> Spot {
+        // Inside the tile, so the conversions neither saturate nor see NaN.
+        let column = (x as i32).min(self.width as i32 - 2);
+        let row = (y as i32).min(self.height as i32 - 2);
+        Spot { index: row as usize * self.width + column as usize, u: x - column as f32, v: y - row as f32 }
+    }
+
+    /// The heights at the four corners of the cell whose north-west corner is sample `index`:
+    /// north-west, north-east, south-west, south-east.
+    #[inline]
+    fn corners(&self, index: usize) -> [f32; 4] {
+        let w = self.width;
+        let (north, south) = (&self.heights[index..index + 2], &self.heights[index + w..index + w + 2]);
+        [north[0], north[1], south[0], south[1]]
+    }
+
+    /// Height at a spot, bilinear over its cell.
+    #[inline]
+    fn height(&self, Spot { index, u, v }: Spot) -> f32 {
+        let [nw, ne, sw, se] = self.corners(index);
+        nw * (1.0 - u) * (1.0 - v) + ne * u * (1.0 - v) + sw * (1.0 - u) * v + se * u * v
+    }
+
+    /// Height and gradient at a spot, bilinear over its cell.
+    #[inline]
+    fn sample(&self, Spot { index, u, v }: Spot) -> (f32, f32, f32) {
+        let [nw, ne, sw, se] = self.corners(index);
         let gx = (ne - nw) * (1.0 - v) + (se - sw) * v;
         let gy = (sw - nw) * (1.0 - u) + (se - ne) * u;
         let h = nw * (1.0 - u) * (1.0 - v) + ne * u * (1.0 - v) + sw * (1.0 - u) * v + se * u * v;
         (h, gx, gy)
     }
 
-    /// Adds `amount` at (`x`, `y`), shared bilinearly among the cell's four corners.
-    fn deposit(&mut self, x: f32, y: f32, amount: f32) {
-        let (cx, cy) = ((x as usize).min(self.width - 2), (y as usize).min(self.height - 2));
-        let (u, v) = (x - cx as f32, y - cy as f32);
-        let i = cy * self.width + cx;
+    /// Adds `amount` at a spot, shared bilinearly among its cell's four corners.
+    #[inline]
+    fn deposit(&mut self, Spot { index, u, v }: Spot, amount: f32) {
+        let w = self.width;
         let nw = amount * (1.0 - u) * (1.0 - v);
         let ne = amount * u * (1.0 - v);
         let sw = amount * (1.0 - u) * v;
         // The last corner takes what the others left, so that exactly `amount` is added.
         let se = amount - nw - ne - sw;
-        self.heights[i] += nw;
-        self.heights[i + 1] += ne;
-        self.heights[i + self.width] += sw;
-        self.heights[i + self.width + 1] += se;
+        let north = &mut self.heights[index..index + 2];
+        north[0] += nw;
+        north[1] += ne;
+        let south = &mut self.heights[index + w..index + w + 2];
+        south[0] += sw;
+        south[1] += se;
     }
 
     /// Takes up to `amount` from the cells of the brush around the sample nearest (`x`, `y`),
     /// never more from a cell than would dig it below `floor`; returns what was taken.
+    #[inline]
     fn erode(&mut self, x: f32, y: f32, amount: f32, floor: f32, brush: &Brush) -> f32 {
-        let (cx, cy) = ((x + 0.5) as isize, (y + 0.5) as isize);
-        let (w, h) = (self.width as isize, self.height as isize);
+        // Inside the tile, so the conversions neither saturate nor see NaN.
+        let (cx, cy) = ((x + 0.5) as i32, (y + 0.5) as i32);
+        let (w, h) = (self.width as i32, self.height as i32);
         let r = brush.reach;
+        let mut taken = 0.0;
         if cx >= r && cy >= r && cx + r < w && cy + r < h {
-            // The whole brush is inside the tile (nearly always): its shares are known.
-            let centre = cy * w + cx;
-            let mut taken = 0.0;
-            for &(offset, share) in &brush.inside {
-                let cell = &mut self.heights[(centre + offset) as usize];
-                let take = (amount * share).min((*cell - floor).max(0.0));
-                *cell -= take;
-                taken += take;
+            // The whole brush is inside the tile (nearly always): its shares are known, and its
+            // rows are runs of neighbouring samples.
+            let centre = (cy * w + cx) as usize;
+            for &(offset, ref shares) in &brush.rows {
+                let first = centre.wrapping_add_signed(offset);
+                let cells = &mut self.heights[first..first + shares.len()];
+                for (cell, &share) in cells.iter_mut().zip(shares) {
+                    let take = at_most(amount * share, at_least(*cell - floor, 0.0));
+                    *cell -= take;
+                    taken += take;
+                }
             }
             return taken;
         }
         let inside =
-            |&&(dx, dy, _): &&(isize, isize, f32)| (0..w).contains(&(cx + dx)) && (0..h).contains(&(cy + dy));
+            |&&(dx, dy, _): &&(i32, i32, f32)| (0..w).contains(&(cx + dx)) && (0..h).contains(&(cy + dy));
         let total: f32 = brush.cells.iter().filter(inside).map(|c| c.2).sum();
-        let mut taken = 0.0;
         for &(dx, dy, weight) in brush.cells.iter().filter(inside) {
-            let i = ((cy + dy) * w + cx + dx) as usize;
-            let cell = &mut self.heights[i];
-            let take = (amount * weight / total).min((*cell - floor).max(0.0));
+            let cell = &mut self.heights[((cy + dy) * w + cx + dx) as usize];
+            let take = at_most(amount * weight / total, at_least(*cell - floor, 0.0));
             *cell -= take;
             taken += take;
         }
@@ -240,8 +268,11 @@ impl Tile {
     ) -> Option<Carried> {
         let State { mut x, mut y, mut dir_x, mut dir_y, mut speed, mut water, mut sediment } = start;
         let (limit_x, limit_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
+        // The cell of the droplet's position, found once a step: the point it flows to is
+        // where it is at the next step.
+        let mut here = self.spot(x, y);
         for step in 0..steps {
-            let (height, gx, gy) = self.sample(x, y);
+            let (height, gx, gy) = self.sample(here);
             if height < sea {
                 break;
             }
@@ -273,48 +304,72 @@ impl Tile {
                 }
                 break;
             }
-            let drop = height - self.sample(next_x, next_y).0;
-            let capacity = (drop * speed * water * p.capacity).max(p.min_capacity);
+            let next = self.spot(next_x, next_y);
+            let drop = height - self.height(next);
+            let capacity = at_least(drop * speed * water * p.capacity, p.min_capacity);
             if drop < 0.0 {
                 // Uphill: fill the dip behind it, with no more than it carries.
-                let amount = sediment.min(-drop);
-                self.deposit(x, y, amount);
+                let amount = at_most(sediment, -drop);
+                self.deposit(here, amount);
                 sediment -= amount;
             } else if sediment > capacity {
                 let amount = (sediment - capacity) * p.deposit_rate;
-                self.deposit(x, y, amount);
+                self.deposit(here, amount);
                 sediment -= amount;
             } else {
                 // Never dig deeper than the point it flows to: no pits of its own making.
-                let amount = ((capacity - sediment) * p.erode_rate).min(drop);
+                let amount = at_most((capacity - sediment) * p.erode_rate, drop);
                 sediment += self.erode(x, y, amount, height - drop, brush);
             }
-            speed = (speed * speed + drop * p.gravity).max(0.0).sqrt();
+            speed = at_least(speed * speed + drop * p.gravity, 0.0).sqrt();
             water *= 1.0 - p.evaporation;
-            (x, y) = (next_x, next_y);
+            (x, y, here) = (next_x, next_y, next);
         }
         if sediment > 0.0 {
-            self.deposit(x, y, sediment);
+            self.deposit(here, sediment);
         }
         None
     }
 }
 
+/// Where a point lies in a tile: the sample at its cell's north-west corner, and its offsets
+/// from it (0 to 1) along the columns and rows.
+#[derive(Debug, Clone, Copy)]
+struct Spot {
+    index: usize,
+    u: f32,
+    v: f32,
+}
+
+/// The larger of `a` and `b`, for numbers that are never NaN (cheaper than `f32::max`, which
+/// checks).
+#[inline]
+fn at_least(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// The smaller of `a` and `b`, for numbers that are never NaN.
+#[inline]
+fn at_most(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
 /// The cells around a droplet it erodes, weighted by closeness.
 struct Brush {
     /// Column and row offsets, and weight.
-    cells: Vec<(isize, isize, f32)>,
+    cells: Vec<(i32, i32, f32)>,
     /// The radius in whole cells.
-    reach: isize,
-    /// Offsets in a tile's samples and shares of the whole (summing to 1), for a brush wholly
-    /// inside the tile.
-    inside: Vec<(isize, f32)>,
+    reach: i32,
+    /// For a brush wholly inside the tile, its rows from the north: the offset of the row's
+    /// first cell from the centre in a tile's samples, and the shares of the whole (all rows'
+    /// summing to 1) of the row's cells from the west.
+    rows: Vec<(isize, Vec<f32>)>,
 }
 
 impl Brush {
     /// The brush of `radius` cells for a tile `width` samples wide.
     fn new(radius: u32, width: usize) -> Self {
-        let r = radius as isize;
+        let r = radius as i32;
         let mut cells = Vec::new();
         for dy in -r..=r {
             for dx in -r..=r {
@@ -325,9 +380,15 @@ impl Brush {
             }
         }
         let total: f32 = cells.iter().map(|c| c.2).sum();
-        let inside =
-            cells.iter().map(|&(dx, dy, weight)| (dy * width as isize + dx, weight / total)).collect();
-        Self { cells, reach: r, inside }
+        // Cells come row by row, west to east, and the cells of a row are contiguous.
+        let mut rows: Vec<(i32, isize, Vec<f32>)> = Vec::new();
+        for &(dx, dy, weight) in &cells {
+            match rows.last_mut() {
+                Some((row, _, shares)) if *row == dy => shares.push(weight / total),
+                _ => rows.push((dy, dy as isize * width as isize + dx as isize, vec![weight / total])),
+            }
+        }
+        Self { cells, reach: r, rows: rows.into_iter().map(|(_, offset, shares)| (offset, shares)).collect() }
     }
 }
 
