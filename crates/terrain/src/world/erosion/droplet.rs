@@ -61,6 +61,8 @@ pub struct Tile {
     origin: (u32, u32),
     /// The grid's columns and rows.
     grid: (u32, u32),
+    /// The largest column and row coordinates in the tile (`width - 1`, `height - 1`).
+    limit: (f32, f32),
 }
 
 /// A droplet that reached the edge of its tile (not the grid's) and goes on in another tiling:
@@ -96,7 +98,8 @@ impl Tile {
     /// A tile of `heights` alone (a whole grid: droplets stop at its edges).
     pub fn new(width: usize, height: usize, heights: Vec<f32>) -> Self {
         assert_eq!(heights.len(), width * height, "tile size");
-        Self { width, height, heights, origin: (0, 0), grid: (width as u32, height as u32) }
+        let limit = (width.saturating_sub(1) as f32, height.saturating_sub(1) as f32);
+        Self { width, height, heights, origin: (0, 0), grid: (width as u32, height as u32), limit }
     }
 
     /// The `w` x `h` rectangle at column `x`, row `y` of a grid of `columns` x `rows` samples.
@@ -116,9 +119,10 @@ impl Tile {
         self.heights
     }
 
-    /// Runs `count` droplets one after another, their start points drawn from `random`. A droplet
-    /// that is (or gets) below `sea` (cell units; `f32::NEG_INFINITY` for no sea) ends there and
-    /// leaves its sediment: rivers end at the sea.
+    /// Runs `count` droplets, their start points drawn from `random`, [`LANES`] at a time (a
+    /// step of each in turn; a lane that frees takes the next droplet). A droplet that is (or
+    /// gets) below `sea` (cell units; `f32::NEG_INFINITY` for no sea) ends there and leaves its
+    /// sediment: rivers end at the sea.
     /// Returns, in the order they left, the droplets that reached an edge of the tile inside
     /// the grid.
     pub fn run(
@@ -134,34 +138,85 @@ impl Tile {
         }
         let brush = Brush::new(params.radius, self.width);
         let (span_x, span_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
-        for _ in 0..count {
+        let mut left = count;
+        let next = || {
+            left = left.checked_sub(1)?;
             let (x, y) = (random.unit() * span_x, random.unit() * span_y);
             let start = State { x, y, dir_x: 0.0, dir_y: 0.0, speed: 1.0, water: 1.0, sediment: 0.0 };
-            carried.extend(self.droplet(start, params.max_steps, params, sea, &brush, true));
-        }
+            Some((start, params.max_steps))
+        };
+        self.run_lanes(next, params, sea, &brush, Some(&mut carried));
         carried
     }
 
-    /// Runs on, one after another, droplets handed on from another tiling (in grid coordinates,
-    /// inside this tile); those that reach this tile's edge too stop there and leave their
-    /// sediment.
+    /// Runs on, [`LANES`] at a time as [`Tile::run`] does, droplets handed on from another
+    /// tiling (in grid coordinates, inside this tile); those that reach this tile's edge too
+    /// stop there and leave their sediment.
     pub fn resume(&mut self, droplets: &[Carried], params: &DropletParams, sea: f32) {
         if self.width < 2 || self.height < 2 {
             return;
         }
         let brush = Brush::new(params.radius, self.width);
         let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
-        for d in droplets {
+        let (limit_x, limit_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
+        let mut droplets = droplets.iter();
+        let next = || {
+            let d = droplets.next()?;
             let start = State {
-                x: (d.x - ox).clamp(0.0, (self.width - 1) as f32),
-                y: (d.y - oy).clamp(0.0, (self.height - 1) as f32),
+                x: (d.x - ox).clamp(0.0, limit_x),
+                y: (d.y - oy).clamp(0.0, limit_y),
                 dir_x: d.dir_x,
                 dir_y: d.dir_y,
                 speed: d.speed,
                 water: d.water,
                 sediment: d.sediment,
             };
-            self.droplet(start, d.steps_left, params, sea, &brush, false);
+            Some((start, d.steps_left))
+        };
+        self.run_lanes(next, params, sea, &brush, None);
+    }
+
+    /// Runs the droplets `next` gives (a start and the steps it may take) in [`LANES`] lanes,
+    /// a step of each busy lane in turn, until `next` gives no more and every lane is done. The
+    /// droplets that reach an edge of the tile inside the grid go to `carried` in the order
+    /// they leave; without `carried` they stop there.
+    fn run_lanes(
+        &mut self,
+        mut next: impl FnMut() -> Option<(State, u32)>,
+        p: &DropletParams,
+        sea: f32,
+        brush: &Brush,
+        mut carried: Option<&mut Vec<Carried>>,
+    ) {
+        let mut lanes: [Option<Running>; LANES] = [None; LANES];
+        let mut more = true;
+        loop {
+            let mut busy = false;
+            for lane in &mut lanes {
+                if lane.is_none() && more {
+                    match next() {
+                        Some((state, steps)) => {
+                            *lane = Some(Running { here: self.spot(state.x, state.y), state, step: 0, steps })
+                        }
+                        None => more = false,
+                    }
+                }
+                let Some(droplet) = lane else { continue };
+                busy = true;
+                match self.step(droplet, p, sea, brush, carried.is_some()) {
+                    Outcome::Runs => {}
+                    Outcome::Stopped => *lane = None,
+                    Outcome::Left(left) => {
+                        if let Some(carried) = carried.as_mut() {
+                            carried.push(left);
+                        }
+                        *lane = None;
+                    }
+                }
+            }
+            if !busy {
+                break;
+            }
         }
     }
 
@@ -172,7 +227,13 @@ impl Tile {
         // Inside the tile, so the conversions neither saturate nor see NaN.
         let column = (x as i32).min(self.width as i32 - 2);
         let row = (y as i32).min(self.height as i32 - 2);
-        Spot { index: row as usize * self.width + column as usize, u: x - column as f32, v: y - row as f32 }
+        Spot {
+            index: row as usize * self.width + column as usize,
+            column,
+            row,
+            u: x - column as f32,
+            v: y - row as f32,
+        }
     }
 
     /// The heights at the four corners of the cell whose north-west corner is sample `index`:
@@ -186,24 +247,27 @@ impl Tile {
 
     /// Height at a spot, bilinear over its cell.
     #[inline]
-    fn height(&self, Spot { index, u, v }: Spot) -> f32 {
+    fn height(&self, Spot { index, u, v, .. }: Spot) -> f32 {
         let [nw, ne, sw, se] = self.corners(index);
-        nw * (1.0 - u) * (1.0 - v) + ne * u * (1.0 - v) + sw * (1.0 - u) * v + se * u * v
+        let (north, south) = (nw + (ne - nw) * u, sw + (se - sw) * u);
+        north + (south - north) * v
     }
 
     /// Height and gradient at a spot, bilinear over its cell.
     #[inline]
-    fn sample(&self, Spot { index, u, v }: Spot) -> (f32, f32, f32) {
+    fn sample(&self, Spot { index, u, v, .. }: Spot) -> (f32, f32, f32) {
         let [nw, ne, sw, se] = self.corners(index);
-        let gx = (ne - nw) * (1.0 - v) + (se - sw) * v;
-        let gy = (sw - nw) * (1.0 - u) + (se - ne) * u;
-        let h = nw * (1.0 - u) * (1.0 - v) + ne * u * (1.0 - v) + sw * (1.0 - u) * v + se * u * v;
-        (h, gx, gy)
+        // Along the north and south edges, then between them: the slope across is the
+        // difference of the edges' heights, the slope along blends the edges' slopes.
+        let (along_north, along_south) = (ne - nw, se - sw);
+        let (north, south) = (nw + along_north * u, sw + along_south * u);
+        let gy = south - north;
+        (north + gy * v, along_north + (along_south - along_north) * v, gy)
     }
 
     /// Adds `amount` at a spot, shared bilinearly among its cell's four corners.
     #[inline]
-    fn deposit(&mut self, Spot { index, u, v }: Spot, amount: f32) {
+    fn deposit(&mut self, Spot { index, u, v, .. }: Spot, amount: f32) {
         let w = self.width;
         let nw = amount * (1.0 - u) * (1.0 - v);
         let ne = amount * u * (1.0 - v);
@@ -218,12 +282,11 @@ impl Tile {
         south[1] += se;
     }
 
-    /// Takes up to `amount` from the cells of the brush around the sample nearest (`x`, `y`),
+    /// Takes up to `amount` from the cells of the brush around the sample nearest the spot,
     /// never more from a cell than would dig it below `floor`; returns what was taken.
     #[inline]
-    fn erode(&mut self, x: f32, y: f32, amount: f32, floor: f32, brush: &Brush) -> f32 {
-        // Inside the tile, so the conversions neither saturate nor see NaN.
-        let (cx, cy) = ((x + 0.5) as i32, (y + 0.5) as i32);
+    fn erode(&mut self, here: Spot, amount: f32, floor: f32, brush: &Brush) -> f32 {
+        let (cx, cy) = (here.column + i32::from(here.u >= 0.5), here.row + i32::from(here.v >= 0.5));
         let (w, h) = (self.width as i32, self.height as i32);
         let r = brush.reach;
         let mut taken = 0.0;
@@ -231,6 +294,13 @@ impl Tile {
             // The whole brush is inside the tile (nearly always): its shares are known, and its
             // rows are runs of neighbouring samples.
             let centre = (cy * w + cx) as usize;
+            match brush.side {
+                1 => return self.erode_square::<1>(centre, &brush.square, amount, floor),
+                3 => return self.erode_square::<3>(centre, &brush.square, amount, floor),
+                5 => return self.erode_square::<5>(centre, &brush.square, amount, floor),
+                7 => return self.erode_square::<7>(centre, &brush.square, amount, floor),
+                _ => {}
+            }
             for &(offset, ref shares) in &brush.rows {
                 let first = centre.wrapping_add_signed(offset);
                 let cells = &mut self.heights[first..first + shares.len()];
@@ -254,89 +324,151 @@ impl Tile {
         taken
     }
 
-    /// One droplet from `start` for at most `steps` steps, ending below `sea`. At an edge of
-    /// the tile inside the grid it is returned to be handed on when `may_leave`, else it stops
-    /// there.
-    fn droplet(
+    /// [`Tile::erode`] with a brush whose cells all lie in the `S` x `S` square around
+    /// `centre` (a sample at least `S / 2` from the tile's edges), its `shares` row by row (0 for
+    /// a corner outside the brush): rows of a size known here, which the compiler unrolls.
+    #[inline(always)]
+    fn erode_square<const S: usize>(
         &mut self,
-        start: State,
-        steps: u32,
+        centre: usize,
+        shares: &[f32],
+        amount: f32,
+        floor: f32,
+    ) -> f32 {
+        let Ok(rows) = <&[[f32; S]; S]>::try_from(shares.as_chunks::<S>().0) else { return 0.0 };
+        let w = self.width;
+        let first = centre - (S / 2) * (w + 1);
+        let mut taken = 0.0;
+        for (r, shares) in rows.iter().enumerate() {
+            let start = first + r * w;
+            let Some(Ok(cells)) = self.heights.get_mut(start..start + S).map(<&mut [f32; S]>::try_from)
+            else {
+                continue;
+            };
+            for (cell, &share) in cells.iter_mut().zip(shares) {
+                let take = at_most(amount * share, at_least(*cell - floor, 0.0));
+                *cell -= take;
+                taken += take;
+            }
+        }
+        taken
+    }
+
+    /// One step of droplet `d`: it moves one cell downhill, eroding or depositing at the point it
+    /// leaves. It stops (leaving its sediment where it is) after its last step, below `sea`, on
+    /// flat ground, or at the tile's edge, unless `may_leave` and the edge is inside the grid:
+    /// then it leaves, to be handed on.
+    #[inline(always)]
+    fn step(
+        &mut self,
+        d: &mut Running,
         p: &DropletParams,
         sea: f32,
         brush: &Brush,
         may_leave: bool,
-    ) -> Option<Carried> {
-        let State { mut x, mut y, mut dir_x, mut dir_y, mut speed, mut water, mut sediment } = start;
-        let (limit_x, limit_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
-        // The cell of the droplet's position, found once a step: the point it flows to is
-        // where it is at the next step.
-        let mut here = self.spot(x, y);
-        for step in 0..steps {
-            let (height, gx, gy) = self.sample(here);
-            if height < sea {
-                break;
-            }
-            dir_x = dir_x * p.inertia - gx * (1.0 - p.inertia);
-            dir_y = dir_y * p.inertia - gy * (1.0 - p.inertia);
-            let length = (dir_x * dir_x + dir_y * dir_y).sqrt();
-            if length.is_nan() || length <= 1e-12 {
-                break;
-            }
-            dir_x /= length;
-            dir_y /= length;
-            let (next_x, next_y) = (x + dir_x, y + dir_y);
-            if !(0.0..=limit_x).contains(&next_x) || !(0.0..=limit_y).contains(&next_y) {
-                let (gx, gy) = (next_x + self.origin.0 as f32, next_y + self.origin.1 as f32);
-                let in_grid = (0.0..=(self.grid.0 - 1) as f32).contains(&gx)
-                    && (0.0..=(self.grid.1 - 1) as f32).contains(&gy);
-                if may_leave && in_grid {
-                    let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
-                    return Some(Carried {
-                        x: x + ox,
-                        y: y + oy,
-                        dir_x,
-                        dir_y,
-                        speed,
-                        water,
-                        sediment,
-                        steps_left: steps - step,
-                    });
-                }
-                break;
-            }
-            let next = self.spot(next_x, next_y);
-            let drop = height - self.height(next);
-            let capacity = at_least(drop * speed * water * p.capacity, p.min_capacity);
-            if drop < 0.0 {
-                // Uphill: fill the dip behind it, with no more than it carries.
-                let amount = at_most(sediment, -drop);
-                self.deposit(here, amount);
-                sediment -= amount;
-            } else if sediment > capacity {
-                let amount = (sediment - capacity) * p.deposit_rate;
-                self.deposit(here, amount);
-                sediment -= amount;
-            } else {
-                // Never dig deeper than the point it flows to: no pits of its own making.
-                let amount = at_most((capacity - sediment) * p.erode_rate, drop);
-                sediment += self.erode(x, y, amount, height - drop, brush);
-            }
-            speed = at_least(speed * speed + drop * p.gravity, 0.0).sqrt();
-            water *= 1.0 - p.evaporation;
-            (x, y, here) = (next_x, next_y, next);
+    ) -> Outcome {
+        if d.step == d.steps {
+            return self.stop(d);
         }
-        if sediment > 0.0 {
-            self.deposit(here, sediment);
+        let (height, gx, gy) = self.sample(d.here);
+        if height < sea {
+            return self.stop(d);
         }
-        None
+        let s = &mut d.state;
+        s.dir_x = s.dir_x * p.inertia - gx * (1.0 - p.inertia);
+        s.dir_y = s.dir_y * p.inertia - gy * (1.0 - p.inertia);
+        let length = (s.dir_x * s.dir_x + s.dir_y * s.dir_y).sqrt();
+        if length.is_nan() || length <= 1e-12 {
+            return self.stop(d);
+        }
+        s.dir_x /= length;
+        s.dir_y /= length;
+        let (next_x, next_y) = (s.x + s.dir_x, s.y + s.dir_y);
+        let (limit_x, limit_y) = self.limit;
+        if !(0.0..=limit_x).contains(&next_x) || !(0.0..=limit_y).contains(&next_y) {
+            let (gx, gy) = (next_x + self.origin.0 as f32, next_y + self.origin.1 as f32);
+            let in_grid = (0.0..=(self.grid.0 - 1) as f32).contains(&gx)
+                && (0.0..=(self.grid.1 - 1) as f32).contains(&gy);
+            if may_leave && in_grid {
+                let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
+                return Outcome::Left(Carried {
+                    x: s.x + ox,
+                    y: s.y + oy,
+                    dir_x: s.dir_x,
+                    dir_y: s.dir_y,
+                    speed: s.speed,
+                    water: s.water,
+                    sediment: s.sediment,
+                    steps_left: d.steps - d.step,
+                });
+            }
+            return self.stop(d);
+        }
+        let next = self.spot(next_x, next_y);
+        let drop = height - self.height(next);
+        let capacity = at_least(drop * s.speed * s.water * p.capacity, p.min_capacity);
+        if drop < 0.0 {
+            // Uphill: fill the dip behind it, with no more than it carries.
+            let amount = at_most(s.sediment, -drop);
+            self.deposit(d.here, amount);
+            s.sediment -= amount;
+        } else if s.sediment > capacity {
+            let amount = (s.sediment - capacity) * p.deposit_rate;
+            self.deposit(d.here, amount);
+            s.sediment -= amount;
+        } else {
+            // Never dig deeper than the point it flows to: no pits of its own making.
+            let amount = at_most((capacity - s.sediment) * p.erode_rate, drop);
+            s.sediment += self.erode(d.here, amount, height - drop, brush);
+        }
+        s.speed = at_least(s.speed * s.speed + drop * p.gravity, 0.0).sqrt();
+        s.water *= 1.0 - p.evaporation;
+        (s.x, s.y, d.here) = (next_x, next_y, next);
+        d.step += 1;
+        Outcome::Runs
+    }
+
+    /// Ends droplet `d` where it is, leaving its sediment there.
+    #[inline]
+    fn stop(&mut self, d: &Running) -> Outcome {
+        if d.state.sediment > 0.0 {
+            self.deposit(d.here, d.state.sediment);
+        }
+        Outcome::Stopped
     }
 }
 
+/// Droplets a tile runs at once, a step of each in turn. A droplet's step waits on its last
+/// (the ground it eroded), but not on another droplet's, so the processor works on the steps
+/// of several at the same time. Running them one after another instead gives other (equally
+/// likely) heights, as does another number of lanes.
+const LANES: usize = 4;
+
+/// A droplet as it runs: its state, its cell, the steps it has taken and may take.
+#[derive(Debug, Clone, Copy)]
+struct Running {
+    state: State,
+    here: Spot,
+    step: u32,
+    steps: u32,
+}
+
+/// What a step left a droplet doing.
+enum Outcome {
+    /// It goes on.
+    Runs,
+    /// It stopped and left its sediment.
+    Stopped,
+    /// It reached the tile's edge inside the grid, to be handed on.
+    Left(Carried),
+}
 /// Where a point lies in a tile: the sample at its cell's north-west corner, and its offsets
 /// from it (0 to 1) along the columns and rows.
 #[derive(Debug, Clone, Copy)]
 struct Spot {
     index: usize,
+    column: i32,
+    row: i32,
     u: f32,
     v: f32,
 }
@@ -364,6 +496,11 @@ struct Brush {
     /// first cell from the centre in a tile's samples, and the shares of the whole (all rows'
     /// summing to 1) of the row's cells from the west.
     rows: Vec<(isize, Vec<f32>)>,
+    /// Side of the square that holds the brush's cells (`2 x radius - 1`).
+    side: usize,
+    /// For a brush wholly inside the tile, the shares of the cells of that square, row by row
+    /// from the north, west to east (0 where the square's corners are outside the brush).
+    square: Vec<f32>,
 }
 
 impl Brush {
@@ -388,7 +525,14 @@ impl Brush {
                 _ => rows.push((dy, dy as isize * width as isize + dx as isize, vec![weight / total])),
             }
         }
-        Self { cells, reach: r, rows: rows.into_iter().map(|(_, offset, shares)| (offset, shares)).collect() }
+        let side = 2 * radius as usize - 1;
+        let mut square = vec![0.0; side * side];
+        for &(dx, dy, weight) in &cells {
+            let (column, row) = ((dx + r - 1) as usize, (dy + r - 1) as usize);
+            square[row * side + column] = weight / total;
+        }
+        let rows = rows.into_iter().map(|(_, offset, shares)| (offset, shares)).collect();
+        Self { cells, reach: r, rows, side, square }
     }
 }
 
