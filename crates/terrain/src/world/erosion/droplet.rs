@@ -442,7 +442,7 @@ impl Tile {
 /// (the ground it eroded), but not on another droplet's, so the processor works on the steps
 /// of several at the same time. Running them one after another instead gives other (equally
 /// likely) heights, as does another number of lanes.
-const LANES: usize = 4;
+const LANES: usize = 2;
 
 /// A droplet as it runs: its state, its cell, the steps it has taken and may take.
 #[derive(Debug, Clone, Copy)]
