@@ -203,15 +203,8 @@ impl Tile {
                 }
                 let Some(droplet) = lane else { continue };
                 busy = true;
-                match self.step(droplet, p, sea, brush, carried.is_some()) {
-                    Outcome::Runs => {}
-                    Outcome::Stopped => *lane = None,
-                    Outcome::Left(left) => {
-                        if let Some(carried) = carried.as_mut() {
-                            carried.push(left);
-                        }
-                        *lane = None;
-                    }
+                if !self.step(droplet, p, sea, brush, &mut carried) {
+                    *lane = None;
                 }
             }
             if !busy {
@@ -356,8 +349,8 @@ impl Tile {
 
     /// One step of droplet `d`: it moves one cell downhill, eroding or depositing at the point it
     /// leaves. It stops (leaving its sediment where it is) after its last step, below `sea`, on
-    /// flat ground, or at the tile's edge, unless `may_leave` and the edge is inside the grid:
-    /// then it leaves, to be handed on.
+    /// flat ground, or at the tile's edge, unless there is a `carried` list and the edge is
+    /// inside the grid: then it leaves, onto the list. Returns whether it goes on.
     #[inline(always)]
     fn step(
         &mut self,
@@ -365,8 +358,8 @@ impl Tile {
         p: &DropletParams,
         sea: f32,
         brush: &Brush,
-        may_leave: bool,
-    ) -> Outcome {
+        carried: &mut Option<&mut Vec<Carried>>,
+    ) -> bool {
         if d.step == d.steps {
             return self.stop(d);
         }
@@ -389,9 +382,9 @@ impl Tile {
             let (gx, gy) = (next_x + self.origin.0 as f32, next_y + self.origin.1 as f32);
             let in_grid = (0.0..=(self.grid.0 - 1) as f32).contains(&gx)
                 && (0.0..=(self.grid.1 - 1) as f32).contains(&gy);
-            if may_leave && in_grid {
+            if let (Some(carried), true) = (carried, in_grid) {
                 let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
-                return Outcome::Left(Carried {
+                carried.push(Carried {
                     x: s.x + ox,
                     y: s.y + oy,
                     dir_x: s.dir_x,
@@ -401,6 +394,7 @@ impl Tile {
                     sediment: s.sediment,
                     steps_left: d.steps - d.step,
                 });
+                return false;
             }
             return self.stop(d);
         }
@@ -425,16 +419,16 @@ impl Tile {
         s.water *= 1.0 - p.evaporation;
         (s.x, s.y, d.here) = (next_x, next_y, next);
         d.step += 1;
-        Outcome::Runs
+        true
     }
 
-    /// Ends droplet `d` where it is, leaving its sediment there.
+    /// Ends droplet `d` where it is, leaving its sediment there; returns false (it does not go on).
     #[inline]
-    fn stop(&mut self, d: &Running) -> Outcome {
+    fn stop(&mut self, d: &Running) -> bool {
         if d.state.sediment > 0.0 {
             self.deposit(d.here, d.state.sediment);
         }
-        Outcome::Stopped
+        false
     }
 }
 
@@ -453,15 +447,6 @@ struct Running {
     steps: u32,
 }
 
-/// What a step left a droplet doing.
-enum Outcome {
-    /// It goes on.
-    Runs,
-    /// It stopped and left its sediment.
-    Stopped,
-    /// It reached the tile's edge inside the grid, to be handed on.
-    Left(Carried),
-}
 /// Where a point lies in a tile: the sample at its cell's north-west corner, and its offsets
 /// from it (0 to 1) along the columns and rows.
 #[derive(Debug, Clone, Copy)]
