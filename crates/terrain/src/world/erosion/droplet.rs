@@ -61,6 +61,8 @@ pub struct Tile {
     origin: (u32, u32),
     /// The grid's columns and rows.
     grid: (u32, u32),
+    /// The largest column and row coordinates in the tile (`width - 1`, `height - 1`).
+    limit: (f32, f32),
 }
 
 /// A droplet that reached the edge of its tile (not the grid's) and goes on in another tiling:
@@ -96,7 +98,8 @@ impl Tile {
     /// A tile of `heights` alone (a whole grid: droplets stop at its edges).
     pub fn new(width: usize, height: usize, heights: Vec<f32>) -> Self {
         assert_eq!(heights.len(), width * height, "tile size");
-        Self { width, height, heights, origin: (0, 0), grid: (width as u32, height as u32) }
+        let limit = (width.saturating_sub(1) as f32, height.saturating_sub(1) as f32);
+        Self { width, height, heights, origin: (0, 0), grid: (width as u32, height as u32), limit }
     }
 
     /// The `w` x `h` rectangle at column `x`, row `y` of a grid of `columns` x `rows` samples.
@@ -116,9 +119,10 @@ impl Tile {
         self.heights
     }
 
-    /// Runs `count` droplets one after another, their start points drawn from `random`. A droplet
-    /// that is (or gets) below `sea` (cell units; `f32::NEG_INFINITY` for no sea) ends there and
-    /// leaves its sediment: rivers end at the sea.
+    /// Runs `count` droplets, their start points drawn from `random`, [`LANES`] at a time (a
+    /// step of each in turn; a lane that frees takes the next droplet). A droplet that is (or
+    /// gets) below `sea` (cell units; `f32::NEG_INFINITY` for no sea) ends there and leaves its
+    /// sediment: rivers end at the sea.
     /// Returns, in the order they left, the droplets that reached an edge of the tile inside
     /// the grid.
     pub fn run(
@@ -134,187 +138,360 @@ impl Tile {
         }
         let brush = Brush::new(params.radius, self.width);
         let (span_x, span_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
-        for _ in 0..count {
+        let mut left = count;
+        let next = || {
+            left = left.checked_sub(1)?;
             let (x, y) = (random.unit() * span_x, random.unit() * span_y);
             let start = State { x, y, dir_x: 0.0, dir_y: 0.0, speed: 1.0, water: 1.0, sediment: 0.0 };
-            carried.extend(self.droplet(start, params.max_steps, params, sea, &brush, true));
-        }
+            Some((start, params.max_steps))
+        };
+        self.run_lanes(next, params, sea, &brush, Some(&mut carried));
         carried
     }
 
-    /// Runs on, one after another, droplets handed on from another tiling (in grid coordinates,
-    /// inside this tile); those that reach this tile's edge too stop there and leave their
-    /// sediment.
+    /// Runs on, [`LANES`] at a time as [`Tile::run`] does, droplets handed on from another
+    /// tiling (in grid coordinates, inside this tile); those that reach this tile's edge too
+    /// stop there and leave their sediment.
     pub fn resume(&mut self, droplets: &[Carried], params: &DropletParams, sea: f32) {
         if self.width < 2 || self.height < 2 {
             return;
         }
         let brush = Brush::new(params.radius, self.width);
         let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
-        for d in droplets {
+        let (limit_x, limit_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
+        let mut droplets = droplets.iter();
+        let next = || {
+            let d = droplets.next()?;
             let start = State {
-                x: (d.x - ox).clamp(0.0, (self.width - 1) as f32),
-                y: (d.y - oy).clamp(0.0, (self.height - 1) as f32),
+                x: (d.x - ox).clamp(0.0, limit_x),
+                y: (d.y - oy).clamp(0.0, limit_y),
                 dir_x: d.dir_x,
                 dir_y: d.dir_y,
                 speed: d.speed,
                 water: d.water,
                 sediment: d.sediment,
             };
-            self.droplet(start, d.steps_left, params, sea, &brush, false);
+            Some((start, d.steps_left))
+        };
+        self.run_lanes(next, params, sea, &brush, None);
+    }
+
+    /// Runs the droplets `next` gives (a start and the steps it may take) in [`LANES`] lanes,
+    /// a step of each busy lane in turn, until `next` gives no more and every lane is done. The
+    /// droplets that reach an edge of the tile inside the grid go to `carried` in the order
+    /// they leave; without `carried` they stop there.
+    fn run_lanes(
+        &mut self,
+        mut next: impl FnMut() -> Option<(State, u32)>,
+        p: &DropletParams,
+        sea: f32,
+        brush: &Brush,
+        mut carried: Option<&mut Vec<Carried>>,
+    ) {
+        let mut lanes: [Option<Running>; LANES] = [None; LANES];
+        let mut more = true;
+        loop {
+            let mut busy = false;
+            for lane in &mut lanes {
+                if lane.is_none() && more {
+                    match next() {
+                        Some((state, steps)) => {
+                            *lane = Some(Running { here: self.spot(state.x, state.y), state, step: 0, steps })
+                        }
+                        None => more = false,
+                    }
+                }
+                let Some(droplet) = lane else { continue };
+                busy = true;
+                if !self.step(droplet, p, sea, brush, &mut carried) {
+                    *lane = None;
+                }
+            }
+            if !busy {
+                break;
+            }
         }
     }
 
-    /// Height and gradient at (`x`, `y`), bilinear over the cell it lies in.
-    fn sample(&self, x: f32, y: f32) -> (f32, f32, f32) {
-        let (cx, cy) = ((x as usize).min(self.width - 2), (y as usize).min(self.height - 2));
-        let (u, v) = (x - cx as f32, y - cy as f32);
-        let i = cy * self.width + cx;
-        let (nw, ne) = (self.heights[i], self.heights[i + 1]);
-        let (sw, se) = (self.heights[i + self.width], self.heights[i + self.width + 1]);
-        let gx = (ne - nw) * (1.0 - v) + (se - sw) * v;
-        let gy = (sw - nw) * (1.0 - u) + (se - ne) * u;
-        let h = nw * (1.0 - u) * (1.0 - v) + ne * u * (1.0 - v) + sw * (1.0 - u) * v + se * u * v;
-        (h, gx, gy)
+    /// Where (`x`, `y`) lies: the cell (the last one for a point on the far edges) and the
+    /// point's offsets in it. `x` and `y` are inside the tile (0 to width - 1, 0 to height - 1).
+    #[inline]
+    fn spot(&self, x: f32, y: f32) -> Spot {
+        // Inside the tile, so the conversions neither saturate nor see NaN.
+        let column = (x as i32).min(self.width as i32 - 2);
+        let row = (y as i32).min(self.height as i32 - 2);
+        Spot {
+            index: row as usize * self.width + column as usize,
+            column,
+            row,
+            u: x - column as f32,
+            v: y - row as f32,
+        }
     }
 
-    /// Adds `amount` at (`x`, `y`), shared bilinearly among the cell's four corners.
-    fn deposit(&mut self, x: f32, y: f32, amount: f32) {
-        let (cx, cy) = ((x as usize).min(self.width - 2), (y as usize).min(self.height - 2));
-        let (u, v) = (x - cx as f32, y - cy as f32);
-        let i = cy * self.width + cx;
+    /// The heights at the four corners of the cell whose north-west corner is sample `index`:
+    /// north-west, north-east, south-west, south-east.
+    #[inline]
+    fn corners(&self, index: usize) -> [f32; 4] {
+        let w = self.width;
+        let (north, south) = (&self.heights[index..index + 2], &self.heights[index + w..index + w + 2]);
+        [north[0], north[1], south[0], south[1]]
+    }
+
+    /// Height at a spot, bilinear over its cell.
+    #[inline]
+    fn height(&self, Spot { index, u, v, .. }: Spot) -> f32 {
+        let [nw, ne, sw, se] = self.corners(index);
+        let (north, south) = (nw + (ne - nw) * u, sw + (se - sw) * u);
+        north + (south - north) * v
+    }
+
+    /// Height and gradient at a spot, bilinear over its cell.
+    #[inline]
+    fn sample(&self, Spot { index, u, v, .. }: Spot) -> (f32, f32, f32) {
+        let [nw, ne, sw, se] = self.corners(index);
+        // Along the north and south edges, then between them: the slope across is the
+        // difference of the edges' heights, the slope along blends the edges' slopes.
+        let (along_north, along_south) = (ne - nw, se - sw);
+        let (north, south) = (nw + along_north * u, sw + along_south * u);
+        let gy = south - north;
+        (north + gy * v, along_north + (along_south - along_north) * v, gy)
+    }
+
+    /// Adds `amount` at a spot, shared bilinearly among its cell's four corners.
+    #[inline]
+    fn deposit(&mut self, Spot { index, u, v, .. }: Spot, amount: f32) {
+        let w = self.width;
         let nw = amount * (1.0 - u) * (1.0 - v);
         let ne = amount * u * (1.0 - v);
         let sw = amount * (1.0 - u) * v;
         // The last corner takes what the others left, so that exactly `amount` is added.
         let se = amount - nw - ne - sw;
-        self.heights[i] += nw;
-        self.heights[i + 1] += ne;
-        self.heights[i + self.width] += sw;
-        self.heights[i + self.width + 1] += se;
+        let north = &mut self.heights[index..index + 2];
+        north[0] += nw;
+        north[1] += ne;
+        let south = &mut self.heights[index + w..index + w + 2];
+        south[0] += sw;
+        south[1] += se;
     }
 
-    /// Takes up to `amount` from the cells of the brush around the sample nearest (`x`, `y`),
+    /// Takes up to `amount` from the cells of the brush around the sample nearest the spot,
     /// never more from a cell than would dig it below `floor`; returns what was taken.
-    fn erode(&mut self, x: f32, y: f32, amount: f32, floor: f32, brush: &Brush) -> f32 {
-        let (cx, cy) = ((x + 0.5) as isize, (y + 0.5) as isize);
-        let (w, h) = (self.width as isize, self.height as isize);
+    #[inline]
+    fn erode(&mut self, here: Spot, amount: f32, floor: f32, brush: &Brush) -> f32 {
+        let (cx, cy) = (here.column + i32::from(here.u >= 0.5), here.row + i32::from(here.v >= 0.5));
+        let (w, h) = (self.width as i32, self.height as i32);
         let r = brush.reach;
+        let mut taken = 0.0;
         if cx >= r && cy >= r && cx + r < w && cy + r < h {
-            // The whole brush is inside the tile (nearly always): its shares are known.
-            let centre = cy * w + cx;
-            let mut taken = 0.0;
-            for &(offset, share) in &brush.inside {
-                let cell = &mut self.heights[(centre + offset) as usize];
-                let take = (amount * share).min((*cell - floor).max(0.0));
-                *cell -= take;
-                taken += take;
+            // The whole brush is inside the tile (nearly always): its shares are known, and its
+            // rows are runs of neighbouring samples.
+            let centre = (cy * w + cx) as usize;
+            match brush.side {
+                1 => return self.erode_square::<1>(centre, &brush.square, amount, floor),
+                3 => return self.erode_square::<3>(centre, &brush.square, amount, floor),
+                5 => return self.erode_square::<5>(centre, &brush.square, amount, floor),
+                7 => return self.erode_square::<7>(centre, &brush.square, amount, floor),
+                _ => {}
+            }
+            for &(offset, ref shares) in &brush.rows {
+                let first = centre.wrapping_add_signed(offset);
+                let cells = &mut self.heights[first..first + shares.len()];
+                for (cell, &share) in cells.iter_mut().zip(shares) {
+                    let take = at_most(amount * share, at_least(*cell - floor, 0.0));
+                    *cell -= take;
+                    taken += take;
+                }
             }
             return taken;
         }
         let inside =
-            |&&(dx, dy, _): &&(isize, isize, f32)| (0..w).contains(&(cx + dx)) && (0..h).contains(&(cy + dy));
+            |&&(dx, dy, _): &&(i32, i32, f32)| (0..w).contains(&(cx + dx)) && (0..h).contains(&(cy + dy));
         let total: f32 = brush.cells.iter().filter(inside).map(|c| c.2).sum();
-        let mut taken = 0.0;
         for &(dx, dy, weight) in brush.cells.iter().filter(inside) {
-            let i = ((cy + dy) * w + cx + dx) as usize;
-            let cell = &mut self.heights[i];
-            let take = (amount * weight / total).min((*cell - floor).max(0.0));
+            let cell = &mut self.heights[((cy + dy) * w + cx + dx) as usize];
+            let take = at_most(amount * weight / total, at_least(*cell - floor, 0.0));
             *cell -= take;
             taken += take;
         }
         taken
     }
 
-    /// One droplet from `start` for at most `steps` steps, ending below `sea`. At an edge of
-    /// the tile inside the grid it is returned to be handed on when `may_leave`, else it stops
-    /// there.
-    fn droplet(
+    /// [`Tile::erode`] with a brush whose cells all lie in the `S` x `S` square around
+    /// `centre` (a sample at least `S / 2` from the tile's edges), its `shares` row by row (0 for
+    /// a corner outside the brush): rows of a size known here, which the compiler unrolls.
+    #[inline(always)]
+    fn erode_square<const S: usize>(
         &mut self,
-        start: State,
-        steps: u32,
+        centre: usize,
+        shares: &[f32],
+        amount: f32,
+        floor: f32,
+    ) -> f32 {
+        let Ok(rows) = <&[[f32; S]; S]>::try_from(shares.as_chunks::<S>().0) else { return 0.0 };
+        let w = self.width;
+        let first = centre - (S / 2) * (w + 1);
+        let mut taken = 0.0;
+        for (r, shares) in rows.iter().enumerate() {
+            let start = first + r * w;
+            let Some(Ok(cells)) = self.heights.get_mut(start..start + S).map(<&mut [f32; S]>::try_from)
+            else {
+                continue;
+            };
+            for (cell, &share) in cells.iter_mut().zip(shares) {
+                let take = at_most(amount * share, at_least(*cell - floor, 0.0));
+                *cell -= take;
+                taken += take;
+            }
+        }
+        taken
+    }
+
+    /// One step of droplet `d`: it moves one cell downhill, eroding or depositing at the point it
+    /// leaves. It stops (leaving its sediment where it is) after its last step, below `sea`, on
+    /// flat ground, or at the tile's edge, unless there is a `carried` list and the edge is
+    /// inside the grid: then it leaves, onto the list. Returns whether it goes on.
+    #[inline(always)]
+    fn step(
+        &mut self,
+        d: &mut Running,
         p: &DropletParams,
         sea: f32,
         brush: &Brush,
-        may_leave: bool,
-    ) -> Option<Carried> {
-        let State { mut x, mut y, mut dir_x, mut dir_y, mut speed, mut water, mut sediment } = start;
-        let (limit_x, limit_y) = ((self.width - 1) as f32, (self.height - 1) as f32);
-        for step in 0..steps {
-            let (height, gx, gy) = self.sample(x, y);
-            if height < sea {
-                break;
-            }
-            dir_x = dir_x * p.inertia - gx * (1.0 - p.inertia);
-            dir_y = dir_y * p.inertia - gy * (1.0 - p.inertia);
-            let length = (dir_x * dir_x + dir_y * dir_y).sqrt();
-            if length.is_nan() || length <= 1e-12 {
-                break;
-            }
-            dir_x /= length;
-            dir_y /= length;
-            let (next_x, next_y) = (x + dir_x, y + dir_y);
-            if !(0.0..=limit_x).contains(&next_x) || !(0.0..=limit_y).contains(&next_y) {
-                let (gx, gy) = (next_x + self.origin.0 as f32, next_y + self.origin.1 as f32);
-                let in_grid = (0.0..=(self.grid.0 - 1) as f32).contains(&gx)
-                    && (0.0..=(self.grid.1 - 1) as f32).contains(&gy);
-                if may_leave && in_grid {
-                    let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
-                    return Some(Carried {
-                        x: x + ox,
-                        y: y + oy,
-                        dir_x,
-                        dir_y,
-                        speed,
-                        water,
-                        sediment,
-                        steps_left: steps - step,
-                    });
-                }
-                break;
-            }
-            let drop = height - self.sample(next_x, next_y).0;
-            let capacity = (drop * speed * water * p.capacity).max(p.min_capacity);
-            if drop < 0.0 {
-                // Uphill: fill the dip behind it, with no more than it carries.
-                let amount = sediment.min(-drop);
-                self.deposit(x, y, amount);
-                sediment -= amount;
-            } else if sediment > capacity {
-                let amount = (sediment - capacity) * p.deposit_rate;
-                self.deposit(x, y, amount);
-                sediment -= amount;
-            } else {
-                // Never dig deeper than the point it flows to: no pits of its own making.
-                let amount = ((capacity - sediment) * p.erode_rate).min(drop);
-                sediment += self.erode(x, y, amount, height - drop, brush);
-            }
-            speed = (speed * speed + drop * p.gravity).max(0.0).sqrt();
-            water *= 1.0 - p.evaporation;
-            (x, y) = (next_x, next_y);
+        carried: &mut Option<&mut Vec<Carried>>,
+    ) -> bool {
+        if d.step == d.steps {
+            return self.stop(d);
         }
-        if sediment > 0.0 {
-            self.deposit(x, y, sediment);
+        let (height, gx, gy) = self.sample(d.here);
+        if height < sea {
+            return self.stop(d);
         }
-        None
+        let s = &mut d.state;
+        s.dir_x = s.dir_x * p.inertia - gx * (1.0 - p.inertia);
+        s.dir_y = s.dir_y * p.inertia - gy * (1.0 - p.inertia);
+        let length = (s.dir_x * s.dir_x + s.dir_y * s.dir_y).sqrt();
+        if length.is_nan() || length <= 1e-12 {
+            return self.stop(d);
+        }
+        s.dir_x /= length;
+        s.dir_y /= length;
+        let (next_x, next_y) = (s.x + s.dir_x, s.y + s.dir_y);
+        let (limit_x, limit_y) = self.limit;
+        if !(0.0..=limit_x).contains(&next_x) || !(0.0..=limit_y).contains(&next_y) {
+            let (gx, gy) = (next_x + self.origin.0 as f32, next_y + self.origin.1 as f32);
+            let in_grid = (0.0..=(self.grid.0 - 1) as f32).contains(&gx)
+                && (0.0..=(self.grid.1 - 1) as f32).contains(&gy);
+            if let (Some(carried), true) = (carried, in_grid) {
+                let (ox, oy) = (self.origin.0 as f32, self.origin.1 as f32);
+                carried.push(Carried {
+                    x: s.x + ox,
+                    y: s.y + oy,
+                    dir_x: s.dir_x,
+                    dir_y: s.dir_y,
+                    speed: s.speed,
+                    water: s.water,
+                    sediment: s.sediment,
+                    steps_left: d.steps - d.step,
+                });
+                return false;
+            }
+            return self.stop(d);
+        }
+        let next = self.spot(next_x, next_y);
+        let drop = height - self.height(next);
+        let capacity = at_least(drop * s.speed * s.water * p.capacity, p.min_capacity);
+        if drop < 0.0 {
+            // Uphill: fill the dip behind it, with no more than it carries.
+            let amount = at_most(s.sediment, -drop);
+            self.deposit(d.here, amount);
+            s.sediment -= amount;
+        } else if s.sediment > capacity {
+            let amount = (s.sediment - capacity) * p.deposit_rate;
+            self.deposit(d.here, amount);
+            s.sediment -= amount;
+        } else {
+            // Never dig deeper than the point it flows to: no pits of its own making.
+            let amount = at_most((capacity - s.sediment) * p.erode_rate, drop);
+            s.sediment += self.erode(d.here, amount, height - drop, brush);
+        }
+        s.speed = at_least(s.speed * s.speed + drop * p.gravity, 0.0).sqrt();
+        s.water *= 1.0 - p.evaporation;
+        (s.x, s.y, d.here) = (next_x, next_y, next);
+        d.step += 1;
+        true
     }
+
+    /// Ends droplet `d` where it is, leaving its sediment there; returns false (it does not go on).
+    #[inline]
+    fn stop(&mut self, d: &Running) -> bool {
+        if d.state.sediment > 0.0 {
+            self.deposit(d.here, d.state.sediment);
+        }
+        false
+    }
+}
+
+/// Droplets a tile runs at once, a step of each in turn. A droplet's step waits on its last
+/// (the ground it eroded), but not on another droplet's, so the processor works on the steps
+/// of several at the same time. Running them one after another instead gives other (equally
+/// likely) heights, as does another number of lanes.
+const LANES: usize = 2;
+
+/// A droplet as it runs: its state, its cell, the steps it has taken and may take.
+#[derive(Debug, Clone, Copy)]
+struct Running {
+    state: State,
+    here: Spot,
+    step: u32,
+    steps: u32,
+}
+
+/// Where a point lies in a tile: the sample at its cell's north-west corner, and its offsets
+/// from it (0 to 1) along the columns and rows.
+#[derive(Debug, Clone, Copy)]
+struct Spot {
+    index: usize,
+    column: i32,
+    row: i32,
+    u: f32,
+    v: f32,
+}
+
+/// The larger of `a` and `b`, for numbers that are never NaN (cheaper than `f32::max`, which
+/// checks).
+#[inline]
+fn at_least(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// The smaller of `a` and `b`, for numbers that are never NaN.
+#[inline]
+fn at_most(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
 }
 
 /// The cells around a droplet it erodes, weighted by closeness.
 struct Brush {
     /// Column and row offsets, and weight.
-    cells: Vec<(isize, isize, f32)>,
+    cells: Vec<(i32, i32, f32)>,
     /// The radius in whole cells.
-    reach: isize,
-    /// Offsets in a tile's samples and shares of the whole (summing to 1), for a brush wholly
-    /// inside the tile.
-    inside: Vec<(isize, f32)>,
+    reach: i32,
+    /// For a brush wholly inside the tile, its rows from the north: the offset of the row's
+    /// first cell from the centre in a tile's samples, and the shares of the whole (all rows'
+    /// summing to 1) of the row's cells from the west.
+    rows: Vec<(isize, Vec<f32>)>,
+    /// Side of the square that holds the brush's cells (`2 x radius - 1`).
+    side: usize,
+    /// For a brush wholly inside the tile, the shares of the cells of that square, row by row
+    /// from the north, west to east (0 where the square's corners are outside the brush).
+    square: Vec<f32>,
 }
 
 impl Brush {
     /// The brush of `radius` cells for a tile `width` samples wide.
     fn new(radius: u32, width: usize) -> Self {
-        let r = radius as isize;
+        let r = radius as i32;
         let mut cells = Vec::new();
         for dy in -r..=r {
             for dx in -r..=r {
@@ -325,9 +502,22 @@ impl Brush {
             }
         }
         let total: f32 = cells.iter().map(|c| c.2).sum();
-        let inside =
-            cells.iter().map(|&(dx, dy, weight)| (dy * width as isize + dx, weight / total)).collect();
-        Self { cells, reach: r, inside }
+        // Cells come row by row, west to east, and the cells of a row are contiguous.
+        let mut rows: Vec<(i32, isize, Vec<f32>)> = Vec::new();
+        for &(dx, dy, weight) in &cells {
+            match rows.last_mut() {
+                Some((row, _, shares)) if *row == dy => shares.push(weight / total),
+                _ => rows.push((dy, dy as isize * width as isize + dx as isize, vec![weight / total])),
+            }
+        }
+        let side = 2 * radius as usize - 1;
+        let mut square = vec![0.0; side * side];
+        for &(dx, dy, weight) in &cells {
+            let (column, row) = ((dx + r - 1) as usize, (dy + r - 1) as usize);
+            square[row * side + column] = weight / total;
+        }
+        let rows = rows.into_iter().map(|(_, offset, shares)| (offset, shares)).collect();
+        Self { cells, reach: r, rows, side, square }
     }
 }
 
