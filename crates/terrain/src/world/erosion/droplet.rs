@@ -121,8 +121,8 @@ impl Tile {
 
     /// Runs `count` droplets, their start points drawn from `random`, [`LANES`] at a time (a
     /// step of each in turn; a lane that frees takes the next droplet). A droplet that is (or
-    /// gets) below `sea` (cell units; `f32::NEG_INFINITY` for no sea) ends there and leaves its
-    /// sediment: rivers end at the sea.
+    /// gets) below `sea` (cell units; `f32::NEG_INFINITY` for no sea) erodes no more: its
+    /// sediment settles on the seabed over its next steps, as a river's does off its mouth.
     /// Returns, in the order they left, the droplets that reached an edge of the tile inside
     /// the grid.
     pub fn run(
@@ -275,6 +275,15 @@ impl Tile {
         south[1] += se;
     }
 
+    /// The highest of the four samples around the spot (no corner of its cell rises above the
+    /// water by what settles there while this stays below it).
+    #[inline]
+    fn highest_corner(&self, Spot { index, .. }: Spot) -> f32 {
+        let w = self.width;
+        let (north, south) = (&self.heights[index..index + 2], &self.heights[index + w..index + w + 2]);
+        at_least(at_least(north[0], north[1]), at_least(south[0], south[1]))
+    }
+
     /// Takes up to `amount` from the cells of the brush around the sample nearest the spot,
     /// never more from a cell than would dig it below `floor`; returns what was taken.
     #[inline]
@@ -348,9 +357,10 @@ impl Tile {
     }
 
     /// One step of droplet `d`: it moves one cell downhill, eroding or depositing at the point it
-    /// leaves. It stops (leaving its sediment where it is) after its last step, below `sea`, on
-    /// flat ground, or at the tile's edge, unless there is a `carried` list and the edge is
-    /// inside the grid: then it leaves, onto the list. Returns whether it goes on.
+    /// leaves; below `sea` it only lets a share of its sediment settle ([`SEA_SETTLING`]), and
+    /// ends there once it carries none. It stops (leaving its sediment where it is) after its
+    /// last step, on flat ground, or at the tile's edge, unless there is a `carried` list and the
+    /// edge is inside the grid: then it leaves, onto the list. Returns whether it goes on.
     #[inline(always)]
     fn step(
         &mut self,
@@ -364,8 +374,9 @@ impl Tile {
             return self.stop(d);
         }
         let (height, gx, gy) = self.sample(d.here);
-        if height < sea {
-            return self.stop(d);
+        let in_sea = height < sea;
+        if in_sea && d.state.sediment <= 0.0 {
+            return false;
         }
         let s = &mut d.state;
         s.dir_x = s.dir_x * p.inertia - gx * (1.0 - p.inertia);
@@ -399,6 +410,19 @@ impl Tile {
             return self.stop(d);
         }
         let next = self.spot(next_x, next_y);
+        if in_sea {
+            // In still water a droplet carries nothing more: its sediment settles along the
+            // seabed as it goes on down it (a fan off the river's mouth), never raising a sample
+            // above the water (what does rise above it later, as a delta grows, is the land's
+            // deposits). Left all at the waterline, the sediment of every droplet that reached
+            // the sea there made a row of mounds along the coast.
+            let amount = at_most(s.sediment * SEA_SETTLING, at_least(sea - self.highest_corner(d.here), 0.0));
+            self.deposit(d.here, amount);
+            s.sediment -= amount;
+            (s.x, s.y, d.here) = (next_x, next_y, next);
+            d.step += 1;
+            return true;
+        }
         let drop = height - self.height(next);
         let capacity = at_least(drop * s.speed * s.water * p.capacity, p.min_capacity);
         if drop < 0.0 {
@@ -431,6 +455,10 @@ impl Tile {
         false
     }
 }
+
+/// The share of its sediment a droplet in the sea leaves at each step (the rest settles further
+/// on: after 20 steps 1% is left, which it leaves where it stops).
+const SEA_SETTLING: f32 = 0.2;
 
 /// Droplets a tile runs at once, a step of each in turn. A droplet's step waits on its last
 /// (the ground it eroded), but not on another droplet's, so the processor works on the steps
@@ -591,6 +619,36 @@ mod tests {
         let mut tile = Tile::new(32, 32, heights.clone());
         tile.run(500, &DropletParams::default(), -100.0, &mut SplitMix64::new(2));
         assert_ne!(tile.into_heights(), heights);
+    }
+
+    #[test]
+    fn sediment_settles_offshore() {
+        // A slope running down into the sea at height 0 (columns 0..40 land, the rest sea), with
+        // a little relief so that droplets gather: what they carry to the sea settles over the
+        // seabed, spread offshore, and no soil is made or lost. (Dropped at the waterline as
+        // each droplet reached the sea, the same run raised 572 seabed samples, none beyond
+        // column 53, and piled a row of mounds along the coast.)
+        let side = 64;
+        let heights: Vec<f32> = (0..side * side)
+            .map(|i| {
+                let (x, y) = ((i % side) as f32, (i / side) as f32);
+                20.0 - x * 0.5 + 0.3 * (x * 0.7).sin() * (y * 0.9).cos()
+            })
+            .collect();
+        let mut tile = Tile::new(side, side, heights.clone());
+        tile.run(4000, &DropletParams::default(), 0.0, &mut SplitMix64::new(7));
+        let after = tile.into_heights();
+        let total = |h: &[f32]| h.iter().map(|&v| v as f64).sum::<f64>();
+        assert!((total(&after) - total(&heights)).abs() < 1e-2 * side as f64, "soil made or lost");
+        let (mut raised, mut furthest) = (0, 0);
+        for (i, (&a, &b)) in after.iter().zip(&heights).enumerate() {
+            if b < -1.0 && a > b + 1e-4 {
+                raised += 1;
+                furthest = furthest.max(i % side);
+            }
+        }
+        assert!(raised > 900, "only {raised} seabed samples got sediment");
+        assert!(furthest >= 58, "sediment stops at column {furthest}");
     }
 
     #[test]

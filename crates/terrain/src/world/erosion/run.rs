@@ -78,8 +78,9 @@ pub struct ErosionParams {
     pub thermal_passes: u32,
     /// The steepest stable slope, in degrees from the horizontal (0 to 89).
     pub talus_degrees: f32,
-    /// Height of the sea (in the units of the heights), where droplets end and leave their
-    /// sediment, as rivers do; `None` for no sea (droplets run on over ground below any level).
+    /// Height of the sea (in the units of the heights), where droplets stop eroding and their
+    /// sediment settles on the seabed below the water, as rivers' does; `None` for no sea
+    /// (droplets run on over ground below any level).
     pub sea_level: Option<f32>,
     /// Fraction of a slope's excess over the talus slope moved per thermal pass (0 to 0.5).
     pub thermal_rate: f32,
