@@ -82,20 +82,26 @@ async function tryCapture(page, name) {
   }
 }
 
+// Opens the page at `query` in `page` (800x600, its errors gathered in `report`) and waits until
+// it has drawn 3 frames of `what` (or stopped on an error).
+async function openAndDraw(page, query, report, what) {
+  await page.setViewport({ width: 800, height: 600 });
+  page.on('pageerror', (error) => report.pageErrors.push(error.message));
+  await page.goto(`${url}/${query}`);
+  await waitFor(page, `frames of ${what} (${query})`, () => {
+    const s = window.rayterra?.state?.();
+    return s && (s.error || s.frames >= 3);
+  }, 180);
+}
+
 // The page at `query` in a new tab of `browser`: its state after 3 frames (or its stop), and the
 // frame it drew, written as NAME-frame.rgba.
 async function drawOnce(browser, query, name) {
   const report = { query, console: [], pageErrors: [] };
   const page = await browser.newPage();
   try {
-    await page.setViewport({ width: 800, height: 600 });
     page.on('console', (message) => report.console.push(`${message.type()}: ${message.text()}`));
-    page.on('pageerror', (error) => report.pageErrors.push(error.message));
-    await page.goto(`${url}/${query}`);
-    await waitFor(page, `frames of the world (${query})`, () => {
-      const s = window.rayterra?.state?.();
-      return s && (s.error || s.frames >= 3);
-    }, 180);
+    await openAndDraw(page, query, report, 'the world');
     report.state = await state(page);
     if (!report.state.error) report.frame = await tryCapture(page, `${name}-frame`);
     // Frames go on being drawn without a stop.
@@ -142,13 +148,7 @@ async function demOnce(browser, query, name) {
   const report = { query, pageErrors: [] };
   const page = await browser.newPage();
   try {
-    await page.setViewport({ width: 800, height: 600 });
-    page.on('pageerror', (error) => report.pageErrors.push(error.message));
-    await page.goto(`${url}/${query}`);
-    await waitFor(page, `frames of the island (${query})`, () => {
-      const s = window.rayterra?.state?.();
-      return s && (s.error || s.frames >= 3);
-    }, 180);
+    await openAndDraw(page, query, report, 'the island');
     await page.evaluate((base64, name) => {
       const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
       const transfer = new DataTransfer();
