@@ -82,48 +82,57 @@ async function tryCapture(page, name) {
   }
 }
 
-// Opens the page at `query` in `page` (800x600, its errors gathered in `report`) and waits until
-// it has drawn 3 frames of `what` (or stopped on an error).
-async function openAndDraw(page, query, report, what) {
+// Opens the page at `query` in `page` (800x600), its errors gathered in `report`.
+async function open(page, query, report) {
   await page.setViewport({ width: 800, height: 600 });
   page.on('pageerror', (error) => report.pageErrors.push(error.message));
   await page.goto(`${url}/${query}`);
-  await waitFor(page, `frames of ${what} (${query})`, () => {
+}
+
+// Waits until the page has drawn 3 frames of `what` (or stopped on an error).
+async function firstFrames(page, what) {
+  await waitFor(page, `frames of ${what}`, () => {
     const s = window.rayterra?.state?.();
     return s && (s.error || s.frames >= 3);
   }, 180);
+}
+
+// Runs `work(page)` in a new tab of `browser` and closes it; returns `report`, where an error
+// thrown on the way is its `failure`.
+async function inPage(browser, report, work) {
+  const page = await browser.newPage();
+  try {
+    await work(page);
+  } catch (error) {
+    report.failure = String(error?.stack ?? error);
+  } finally {
+    await page.close();
+  }
+  return report;
 }
 
 // The page at `query` in a new tab of `browser`: its state after 3 frames (or its stop), and the
 // frame it drew, written as NAME-frame.rgba.
 async function drawOnce(browser, query, name) {
   const report = { query, console: [], pageErrors: [] };
-  const page = await browser.newPage();
-  try {
+  return inPage(browser, report, async (page) => {
     page.on('console', (message) => report.console.push(`${message.type()}: ${message.text()}`));
-    await openAndDraw(page, query, report, 'the world');
+    await open(page, query, report);
+    await firstFrames(page, `the world (${query})`);
     report.state = await state(page);
     if (!report.state.error) report.frame = await tryCapture(page, `${name}-frame`);
     // Frames go on being drawn without a stop.
     await sleep(1000);
     report.later = await state(page);
-    return report;
-  } catch (error) {
-    report.failure = String(error?.stack ?? error);
-    return report;
-  } finally {
-    await page.close();
-  }
+  });
 }
 
 // The page at `query` where it cannot draw: the message it shows at first, and what it shows
 // a few seconds later (once the worker has built the world, where `world` says it starts one).
 async function failOnce(browser, { query, world }) {
   const report = { query, pageErrors: [] };
-  const page = await browser.newPage();
-  try {
-    page.on('pageerror', (error) => report.pageErrors.push(error.message));
-    await page.goto(`${url}/${query}`);
+  return inPage(browser, report, async (page) => {
+    await open(page, query, report);
     report.first = await waitFor(page, `the page to say it cannot draw (${query})`, errorShown, 60);
     // The worker finishes its world (which used to clear the message), then time passes.
     if (world) {
@@ -132,13 +141,7 @@ async function failOnce(browser, { query, world }) {
     report.worldsBuilt = await page.evaluate(() => window.rayterra?.worldsBuilt ?? null);
     await sleep(3000);
     report.later = await page.evaluate(shown);
-    return report;
-  } catch (error) {
-    report.failure = String(error?.stack ?? error);
-    return report;
-  } finally {
-    await page.close();
-  }
+  });
 }
 
 // The page at `query` with the elevation data dropped on it once it has drawn the island (a
@@ -146,9 +149,9 @@ async function failOnce(browser, { query, world }) {
 // frame it drew with the data, written as NAME-frame.rgba.
 async function demOnce(browser, query, name) {
   const report = { query, pageErrors: [] };
-  const page = await browser.newPage();
-  try {
-    await openAndDraw(page, query, report, 'the island');
+  return inPage(browser, report, async (page) => {
+    await open(page, query, report);
+    await firstFrames(page, `the island (${query})`);
     await page.evaluate((base64, name) => {
       const bytes = Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
       const transfer = new DataTransfer();
@@ -165,13 +168,7 @@ async function demOnce(browser, query, name) {
       return s.frames >= window.rayterra.demFrames + 3 ? s : null;
     }, 180);
     if (!report.state.failure) report.frame = await tryCapture(page, `${name}-frame`);
-    return report;
-  } catch (error) {
-    report.failure = String(error?.stack ?? error);
-    return report;
-  } finally {
-    await page.close();
-  }
+  });
 }
 
 // Elevation data with the address's water level above its lowest ground, dropped: a lake, drawn.
@@ -214,18 +211,13 @@ async function run(mode) {
       report[name] = await demOnce(browser, query, `${mode}-${name}`);
     }
     const page = await browser.newPage();
-    await page.setViewport({ width: 800, height: 600 });
     page.on('console', (message) => report.console.push(`${message.type()}: ${message.text()}`));
-    page.on('pageerror', (error) => report.pageErrors.push(error.message));
-    await page.goto(`${url}/?size=640x360&paused&time=3`);
+    await open(page, '?size=640x360&paused&time=3', report);
     if (mode === 'none') {
       report.error = await waitFor(page, 'the page to say it cannot draw', errorShown, 60);
       return report;
     }
-    await waitFor(page, 'frames of the world', () => {
-      const s = window.rayterra?.state?.();
-      return s && (s.error || s.frames >= 3);
-    }, 180);
+    await firstFrames(page, 'the world');
     report.before = await state(page);
     if (report.before.error) return report;
     report.frame = await captureTo(page, `${mode}-frame`);
